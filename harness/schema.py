@@ -79,6 +79,15 @@ def _expected_range(meta: Mapping[str, Any], unit: str | None) -> str:
     return " and ".join(parts) + suffix
 
 
+def _expected_value(tp: Any, meta: Mapping[str, Any]) -> str:
+    """Words for what a field takes, for 'missing key' messages."""
+    doc = meta.get("doc")
+    unit = meta.get("unit")
+    kind = getattr(tp, "__name__", str(tp).replace("typing.", ""))
+    text = f"{kind}" + (f" in {unit}" if unit and unit != "1" else "")
+    return f"{text} ({doc})" if doc else text
+
+
 def _check_range(value: float, meta: Mapping[str, Any], path: str, source: str | None) -> None:
     if not math.isfinite(value):
         raise ProfileError(f"found {value!r}, expected a finite number", source, path)
@@ -220,7 +229,7 @@ def build(cls: type[T], data: Any, *, source: str | None = None, path: str = "")
     if not isinstance(data, Mapping):
         raise ProfileError(f"found {_describe(data)}, expected a mapping (key: value lines)", source, path or None)
     hints = get_type_hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init and not f.metadata.get("internal")}
     unknown = [k for k in data if k not in fields]
     if unknown:
         key = unknown[0]
@@ -237,8 +246,7 @@ def build(cls: type[T], data: Any, *, source: str | None = None, path: str = "")
         if name in data:
             kwargs[name] = _build_value(hints[name], data[name], field.metadata, key_path, source)
         elif field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
-            expected = field.metadata.get("doc") or hints[name]
-            raise ProfileError(f"missing required key; expected {expected}", source, key_path)
+            raise ProfileError(f"missing required key; expected {_expected_value(hints[name], field.metadata)}", source, key_path)
     try:
         return cls(**kwargs)
     except ProfileError:
@@ -247,10 +255,19 @@ def build(cls: type[T], data: Any, *, source: str | None = None, path: str = "")
         raise ProfileError(str(err), source, path or None) from err
 
 
+def internal(default: Any = None, doc: str = "") -> Any:
+    """Declare a field that the loader fills in and a YAML file may not set."""
+    return dataclasses.field(default=default, metadata={"internal": True, "doc": doc})
+
+
 def to_data(obj: Any) -> Any:
     """Turn a built configuration object back into plain YAML-ready data (SI values)."""
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return {f.name: to_data(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+        return {
+            f.name: to_data(getattr(obj, f.name))
+            for f in dataclasses.fields(obj)
+            if not f.metadata.get("internal")
+        }
     if isinstance(obj, Mapping):
         return {k: to_data(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):

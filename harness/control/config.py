@@ -1,0 +1,35 @@
+"""The ``control:`` section of a profile: sample rate, friction source and named designs."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal
+
+from harness.control.designs import ControllerDesign
+from harness.schema import quantity
+
+
+@dataclass(frozen=True)
+class ControlConfig:
+    """Controller sampling and the named controller designs of a profile."""
+
+    controller: str = quantity(doc="name of the design used by default (a key of designs)")
+    designs: Mapping[str, ControllerDesign] = quantity(doc="named controller designs")
+    rate_hz: float = quantity(500.0, unit="Hz", gt=0, doc="controller sample rate f_s")
+    transport_delay_s: float = quantity(0.0, unit="s", ge=0, doc="further sensor-to-force delay in simulation")
+    friction: Literal["estimator", "model"] = "estimator"
+    design_stiffness_scale: float = quantity(1.0, gt=0, doc="story stiffness of the controller's model / plant's")
+
+    def __post_init__(self) -> None:
+        if not self.designs:
+            raise ValueError("designs is empty; expected at least one named controller design")
+        if self.controller not in self.designs:
+            raise ValueError(f"controller {self.controller!r} is not one of the designs: {', '.join(self.designs)}")
+
+
+@dataclass(frozen=True)
+class SimulationConfig:
+    """Integration settings of the offline simulator and the virtual rig's plant."""
+
+    rtol: float = quantity(1e-6, gt=0, lt=1e-2, doc="relative tolerance of the integration kernel")

@@ -1,0 +1,161 @@
+"""The plant: building, bearings and table motion advanced by the compiled kernel.
+
+Used alike by ``harness simulate`` (offline) and the virtual rig (in real time or
+lockstep), so both integrate the same equations the same way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.model.bearing import BearingConfig, friction_force
+from harness.model.building import BuildingConfig, StateSpace, acceleration_maps, state_space
+from harness.model.integrator import advance, default_atol, make_work, table_state
+from harness.signals import Measurements
+
+
+@dataclass(frozen=True)
+class TableMotion:
+    """Table acceleration, velocity and displacement samples, consistent under the
+    piecewise-linear-acceleration rule (see :mod:`harness.records`)."""
+
+    dt_s: float
+    accel_m_s2: np.ndarray
+    velocity_m_s: np.ndarray
+    displacement_m: np.ndarray
+
+    @classmethod
+    def from_motion(cls, motion) -> "TableMotion":
+        """From any object with ``dt_s``, ``accel_m_s2``, ``velocity_m_s``, ``displacement_m``."""
+        return cls(
+            float(motion.dt_s),
+            np.ascontiguousarray(motion.accel_m_s2, dtype=float),
+            np.ascontiguousarray(motion.velocity_m_s, dtype=float),
+            np.ascontiguousarray(motion.displacement_m, dtype=float),
+        )
+
+    @classmethod
+    def at_rest(cls, duration_s: float = 1.0, dt_s: float = 0.01) -> "TableMotion":
+        """A table that does not move."""
+        n = int(round(duration_s / dt_s)) + 1
+        zeros = np.zeros(n)
+        return cls(dt_s, zeros, zeros.copy(), zeros.copy())
+
+    @property
+    def duration_s(self) -> float:
+        """Length of the motion (s)."""
+        return (len(self.accel_m_s2) - 1) * self.dt_s
+
+    def state(self, t: float) -> tuple[float, float]:
+        """Table displacement (m) and velocity (m/s) at ``t``."""
+        return table_state(t, self.accel_m_s2, self.velocity_m_s, self.displacement_m, self.dt_s)
+
+    def acceleration(self, t: np.ndarray) -> np.ndarray:
+        """Table acceleration (m/s^2) at times ``t`` (linear between samples, zero after the end)."""
+        times = np.arange(len(self.accel_m_s2)) * self.dt_s
+        return np.interp(t, times, self.accel_m_s2, left=self.accel_m_s2[0], right=0.0)
+
+
+class Plant:
+    """Building on friction bearings on a moving table; state ``y = (Z, nu)``.
+
+    Parameters
+    ----------
+    building : BuildingConfig
+    bearing : BearingConfig
+    table : TableMotion
+    rtol : float
+        Relative tolerance of the kernel (absolute tolerances scale with it).
+    """
+
+    def __init__(self, building: BuildingConfig, bearing: BearingConfig, table: TableMotion, rtol: float = 1e-6):
+        self.building = building
+        self.bearing = bearing
+        self.table = table
+        self.model: StateSpace = state_space(building)
+        self.bearing_params = bearing.packed(building.total_weight_N)
+        self.rtol = float(rtol)
+        self.atol = default_atol(building.n_stories) * (self.rtol / 1e-6)
+        self.y = np.zeros(self.model.size + 1)
+        self._work = make_work(self.model.size + 1)
+        self.steps = 0
+
+    def reset(self) -> None:
+        """Back to rest: all displacements, velocities and nu zero."""
+        self.y[:] = 0.0
+        self._work[:] = 0.0
+        self.steps = 0
+
+    def advance(self, t0: float, t1: float, force_N: float) -> None:
+        """Integrate from ``t0`` to ``t1`` (s) with the actuator force held at ``force_N``."""
+        if t1 <= t0:
+            return
+        m = self.model
+        t = self.table
+        self.steps += advance(
+            self.y, t0, t1, force_N, m.A, m.B, m.restoring_stiffness_N_per_m, self.bearing_params,
+            t.accel_m_s2, t.velocity_m_s, t.displacement_m, t.dt_s, self.atol, self.rtol, self._work,
+        )
+
+    def measure(self, t: float, out: Measurements) -> Measurements:
+        """Write the exact (noise-free) table and base-mat signals at ``t`` into ``out``."""
+        x0, v0 = self.table.state(t)
+        out.set(x0, v0, self.y[self.model.i_base_displacement], self.y[self.model.i_base_velocity])
+        return out
+
+    def friction_force(self, t: float) -> float:
+        """The bearing friction force of the current state at ``t`` (N)."""
+        _, v0 = self.table.state(t)
+        return friction_force(self.y[self.model.i_base_velocity] - v0, self.y[-1], self.bearing_params)
+
+    def responses(self, times: np.ndarray, states: np.ndarray, forces: np.ndarray) -> dict[str, np.ndarray]:
+        """Derived time series from sampled states.
+
+        Parameters
+        ----------
+        times : ndarray (K,)
+        states : ndarray (K, N + 1)
+            ``(Z, nu)`` at ``times``.
+        forces : ndarray (K,)
+            Actuator force applied from each sample on (N).
+
+        Returns
+        -------
+        dict
+            Canonical run-folder columns (SI): drifts, absolute floor and base accelerations,
+            sliding displacement and velocity, friction force, nu, table motion.
+        """
+        n = self.building.n_stories
+        m = self.model
+        table_x = np.empty(len(times))
+        table_v = np.empty(len(times))
+        for k, t in enumerate(times):
+            table_x[k], table_v[k] = self.table.state(float(t))
+        sliding_v = states[:, m.i_base_velocity] - table_v
+        params = self.bearing_params
+        mu = params[0] - params[1] * np.exp(-params[2] * np.abs(sliding_v))
+        friction = mu * params[3] * states[:, -1]
+        floor_map, base_map = acceleration_maps(self.building)
+        z = states[:, : m.size]
+        base_acc = z @ base_map + (m.restoring_stiffness_N_per_m * table_x - friction + forces) / m.base_mass_kg
+        floor_acc = z @ floor_map.T
+        columns = {
+            "t_s": times,
+            "table_displacement_m": table_x,
+            "table_velocity_m_s": table_v,
+            "table_acceleration_m_s2": self.table.acceleration(times),
+            "base_displacement_m": states[:, m.i_base_displacement],
+            "base_velocity_m_s": states[:, m.i_base_velocity],
+            "base_acceleration_m_s2": base_acc,
+            "sliding_displacement_m": states[:, m.i_base_displacement] - table_x,
+            "sliding_velocity_m_s": sliding_v,
+        }
+        for j in range(n):
+            columns[f"drift_{j + 1}_m"] = states[:, j]
+        for j in range(n):
+            columns[f"floor_acceleration_{j + 1}_m_s2"] = floor_acc[:, j]
+        columns["friction_force_N"] = friction
+        columns["hysteretic_nu"] = states[:, -1]
+        return columns

@@ -1,0 +1,160 @@
+"""Profiles: YAML files loaded into frozen, validated objects.
+
+A profile describes a rig or a study: the building, the bearings, the record, the
+table's limits, the controllers, and (for rigs) the CAN bus, the virtual rig, the
+safety limits and the loop. Rules:
+
+- unknown keys are errors; every physical quantity is SI or names its unit in its key,
+  and a value may carry its own unit as a string (``"0.012 cm"``), converted on load;
+- ``extends: other.yaml`` (path relative to this file) starts from another profile and
+  overrides it key by key (mappings merge, everything else replaces), so an
+  experiment profile can name its rig profile;
+- ``variants: {name: {...overrides...}}`` are named overlays chosen with ``--variant``;
+  every variant is validated on load.
+
+Any problem raises :class:`~harness.errors.ProfileError` naming the file, the key path,
+what was found and what was expected.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from harness.control.config import ControlConfig, SimulationConfig
+from harness.errors import ProfileError
+from harness.model.bearing import BearingConfig
+from harness.model.building import BuildingConfig
+from harness.records import RecordConfig, TableLimits
+from harness.schema import build, internal, quantity, to_data
+
+PROFILE_DIR = Path(__file__).resolve().parent.parent / "profiles"
+DEFAULT_PROFILE = PROFILE_DIR / "nceer_4dof.yaml"
+_MAX_FILE_BYTES = 1_000_000
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A whole validated profile."""
+
+    name: str = quantity(doc="short name used in run-folder names")
+    structure: BuildingConfig = quantity(doc="the building (SPEC 1)")
+    bearing: BearingConfig = quantity(doc="the friction bearings (SPEC 2)")
+    control: ControlConfig = quantity(doc="controller designs and sampling (SPEC 3)")
+    description: str = ""
+    record: RecordConfig = dataclasses.field(default_factory=RecordConfig)
+    table: TableLimits | None = None
+    simulation: SimulationConfig = dataclasses.field(default_factory=SimulationConfig)
+    variants: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    source_path: str = internal("", "the file this profile was loaded from")
+    variant: str = internal("", "the variant applied, if any")
+
+    @property
+    def base_dir(self) -> Path:
+        """Directory of the profile file (relative paths in it are relative to this)."""
+        return Path(self.source_path).parent if self.source_path else Path.cwd()
+
+    def resolved_data(self) -> dict:
+        """The fully resolved profile as plain data (SI), for run folders."""
+        data = to_data(self)
+        data.pop("variants", None)
+        data["loaded_from"] = self.source_path
+        if self.variant:
+            data["variant"] = self.variant
+        return data
+
+
+def _read_yaml(path: Path) -> dict:
+    source = str(path)
+    if not path.is_file():
+        known = ", ".join(sorted(p.name for p in PROFILE_DIR.glob("*.yaml")))
+        raise ProfileError(f"profile file not found; expected an existing YAML file (shipped profiles: {known})", source)
+    raw = path.read_bytes()
+    if len(raw) > _MAX_FILE_BYTES:
+        raise ProfileError(f"file is {len(raw)} bytes; expected a profile under {_MAX_FILE_BYTES} bytes", source)
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ProfileError(f"not UTF-8 text (byte {err.start}); expected a YAML profile", source) from err
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
+        raise ProfileError(f"invalid YAML{where}: {problem}", source) from err
+    if data is None:
+        raise ProfileError("the file is empty; expected a profile mapping with name, structure, bearing, control", source)
+    if not isinstance(data, dict):
+        raise ProfileError(f"found a {type(data).__name__} at the top level; expected a mapping of sections", source)
+    return data
+
+
+def merge(base: Mapping, override: Mapping) -> dict:
+    """Deep-merge ``override`` into a copy of ``base``: mappings merge, other values replace."""
+    result = copy.deepcopy(dict(base))
+    for key, value in override.items():
+        if isinstance(value, Mapping) and isinstance(result.get(key), Mapping):
+            result[key] = merge(result[key], value)
+        else:
+            result[key] = copy.deepcopy(value)
+    return result
+
+
+def _resolve_extends(path: Path, seen: tuple[Path, ...] = ()) -> dict:
+    path = path.resolve()
+    if path in seen:
+        chain = " -> ".join(p.name for p in (*seen, path))
+        raise ProfileError(f"profiles extend each other in a loop: {chain}", str(path))
+    data = _read_yaml(path)
+    parent = data.pop("extends", None)
+    if parent is None:
+        return data
+    if not isinstance(parent, str):
+        raise ProfileError(f"found {parent!r}; expected the path of another profile", str(path), "extends")
+    return merge(_resolve_extends(path.parent / parent, (*seen, path)), data)
+
+
+def _apply_variant(data: dict, variant: str, source: str) -> dict:
+    variants = data.get("variants") or {}
+    if not isinstance(variants, Mapping):
+        raise ProfileError("expected a mapping of variant names to overrides", source, "variants")
+    if variant not in variants:
+        known = ", ".join(variants) or "none"
+        raise ProfileError(f"unknown variant {variant!r}; this profile has: {known}", source, "variants")
+    overlay = variants[variant]
+    if not isinstance(overlay, Mapping):
+        raise ProfileError("expected a mapping of overrides", source, f"variants.{variant}")
+    return merge(data, overlay)
+
+
+def load_profile(path: str | Path | None = None, variant: str | None = None) -> Profile:
+    """Load, merge and validate a profile.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        The YAML file; default ``profiles/nceer_4dof.yaml``.
+    variant : str, optional
+        Name of an entry of ``variants`` to apply.
+
+    Raises
+    ------
+    ProfileError
+    """
+    file = Path(path) if path is not None else DEFAULT_PROFILE
+    source = str(file)
+    data = _resolve_extends(file)
+    profile = build(Profile, data, source=source)
+    for name in profile.variants:  # every variant must give a valid profile
+        if name != variant:
+            build(Profile, _apply_variant(data, name, source), source=f"{source} (variant {name})")
+    if variant:
+        profile = build(Profile, _apply_variant(data, variant, source), source=f"{source} (variant {variant})")
+    return dataclasses.replace(profile, source_path=str(file.resolve()), variant=variant or "")

@@ -1,0 +1,153 @@
+"""``harness simulate``: passive and controlled cases of one profile and record, side by side.
+
+Everything a command needs between the profile and the simulator: the table motion
+with the command-line overrides applied, the controller with its design model, the
+sampling settings, and the results in the JSON layout of the issue tracker (SI).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from harness.control.designs import Controller, build_controller
+from harness.control.estimator import FrictionEstimator
+from harness.errors import ProfileError
+from harness.model.plant import Plant, TableMotion
+from harness.profile import Profile
+from harness.records import check_table_limits, load_motion
+from harness.simulation import CaseResult, SamplingSettings, run_case
+
+NO_CONTROLLER = "none"
+
+
+@dataclass(frozen=True)
+class StudyOptions:
+    """Command-line overrides of a profile; ``None`` keeps the profile's value."""
+
+    record: str | None = None
+    records_dir: str | None = None
+    pga_g: float | None = None
+    time_scale: float | None = None
+    duration_s: float | None = None
+    controller: str | None = None
+    rate_hz: float | None = None
+    friction: str | None = None
+    transport_delay_s: float | None = None
+    design_stiffness_scale: float | None = None
+
+
+@dataclass
+class StudyResult:
+    """Both cases of a study and what they were run with."""
+
+    profile: Profile
+    motion: object
+    controller_name: str
+    settings: SamplingSettings
+    design_stiffness_scale: float
+    cases: dict[str, CaseResult] = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        """The JSON document of ``harness simulate --json`` (SI units)."""
+        motion = self.motion
+        controlled = self.cases.get("controlled", self.cases["passive"])
+        return {
+            "profile": self.profile.name,
+            "record": {
+                "name": motion.name,
+                "pga_g": motion.pga_g,
+                "pgv_m_s": motion.pgv_m_s,
+                "pgd_m": motion.pgd_m,
+                "time_scale": motion.time_scale,
+                "duration_s": motion.duration_s,
+            },
+            "controller": self.controller_name,
+            "sampling": {
+                "rate_hz": self.settings.rate_hz,
+                "transport_delay_s": self.settings.transport_delay_s,
+                "friction_source": self.settings.friction_source,
+                "design_stiffness_scale": self.design_stiffness_scale,
+            },
+            "total_weight_N": self.profile.structure.total_weight_N,
+            "cases": {"passive": self.cases["passive"].peaks, "controlled": controlled.peaks},
+        }
+
+    def write_json(self, path: str | Path) -> None:
+        """Write :meth:`to_json` to ``path``."""
+        Path(path).write_text(json.dumps(self.to_json(), indent=2) + "\n")
+
+
+def prepare_motion(profile: Profile, options: StudyOptions):
+    """The processed table motion for ``profile`` with the overrides, checked against the table."""
+    motion = load_motion(
+        profile.record,
+        base_dir=profile.base_dir,
+        records_dir_flag=options.records_dir,
+        name=options.record,
+        pga_g=options.pga_g,
+        time_scale=options.time_scale,
+        duration_s=options.duration_s,
+    )
+    if profile.table is not None:
+        check_table_limits(motion, profile.table)
+    return motion
+
+
+def make_controller(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
+    """Build the named design of ``profile`` on its (possibly mis-scaled) design model."""
+    designs = profile.control.designs
+    if name not in designs:
+        raise ProfileError(
+            f"unknown controller {name!r}; this profile has {', '.join(designs)} (or 'none' for passive only)",
+            profile.source_path,
+            "control.designs",
+        )
+    design_building = profile.structure
+    if design_stiffness_scale != 1.0:
+        design_building = design_building.with_stiffness_scale(design_stiffness_scale)
+    return build_controller(name, designs[name], design_building)
+
+
+def sampling_settings(profile: Profile, options: StudyOptions) -> SamplingSettings:
+    """Controller sampling from the profile with the overrides."""
+    control = profile.control
+    return SamplingSettings(
+        rate_hz=options.rate_hz or control.rate_hz,
+        transport_delay_s=control.transport_delay_s if options.transport_delay_s is None else options.transport_delay_s,
+        friction_source=options.friction or control.friction,
+    )
+
+
+def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, float], None] | None = None) -> StudyResult:
+    """Simulate the passive case and (unless the controller is 'none') the controlled case.
+
+    Parameters
+    ----------
+    profile : Profile
+    options : StudyOptions
+    progress : callable, optional
+        ``progress(case_name, fraction)``.
+    """
+    motion = prepare_motion(profile, options)
+    settings = sampling_settings(profile, options)
+    scale = options.design_stiffness_scale or profile.control.design_stiffness_scale
+    name = options.controller or profile.control.controller
+    controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
+    table = TableMotion.from_motion(motion)
+    plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
+    result = StudyResult(profile, motion, name, settings, scale)
+    duration = motion.duration_s
+
+    def reporter(case: str):
+        return None if progress is None else (lambda fraction: progress(case, fraction))
+
+    result.cases["passive"] = run_case("passive", plant, duration, settings, progress=reporter("passive"))
+    if controller is not None:
+        estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+        result.cases["controlled"] = run_case(
+            "controlled", plant, duration, settings, controller, estimator, progress=reporter("controlled")
+        )
+    return result

@@ -1,0 +1,19 @@
+"""Shared fixtures: paths to the repository, its profiles, and the shared ground-motion records."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+PROFILES = REPO / "profiles"
+SHARED_RECORDS = REPO.parent / "shared" / "data" / "ground_motions"
+
+
+@pytest.fixture(scope="session")
+def records_dir() -> Path:
+    """The real accelerograms beside the checkout; skips the test where they are absent."""
+    if not (SHARED_RECORDS / "elcentro_1940_NS.csv").is_file():
+        pytest.skip(f"real records not found in {SHARED_RECORDS} (they are kept outside the project; see README)")
+    return SHARED_RECORDS
