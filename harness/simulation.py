@@ -108,38 +108,52 @@ def run_case(
     size = plant.y.size
     states = np.empty((n_samples + 1, size))
     applied = np.zeros(n_samples + 1)
-    internals = np.zeros((n_samples + 1, 4))  # S, G, friction estimate, raw force
+    sliding_variable = np.zeros(n_samples + 1)
+    equivalent_force = np.zeros(n_samples + 1)
+    friction_estimate = np.zeros(n_samples + 1)
+    raw_force = np.zeros(n_samples + 1)
+    table_x, table_v = plant.table.states(times)
     meas = Measurements()
     pending: deque = deque()
     active = [0.0]
     n_z = size - 1
+    delayed = settings.transport_delay_s > 0.0
+    use_estimator = settings.friction_source == "estimator"
     report_every = max(1, n_samples // 20)
     for k in range(n_samples):
         t = times[k]
         states[k] = plant.y
+        force = 0.0
         if controller is not None:
-            plant.measure(t, meas)
-            if settings.friction_source == "estimator":
+            plant.measure(t, meas, table_x[k], table_v[k])
+            if use_estimator:
                 friction = estimator.update(t, period, meas.sliding_velocity_m_s)
             else:
-                friction = plant.friction_force(t)
+                friction = plant.friction_force(t, table_v[k])
             force = controller.update(t, period, meas, friction, plant.y[:n_z])
-            internals[k] = (controller.sliding_variable, controller.equivalent_force_N, friction, force)
+            sliding_variable[k] = controller.sliding_variable
+            equivalent_force[k] = controller.equivalent_force_N
+            friction_estimate[k] = friction
+            raw_force[k] = force
+        if delayed:
             pending.append((t + settings.transport_delay_s, force))
-        while pending and pending[0][0] <= t:
-            active[0] = pending.popleft()[1]
-        applied[k] = active[0]
-        _integrate_interval(plant, t, times[k + 1], pending, active)
+            while pending and pending[0][0] <= t:
+                active[0] = pending.popleft()[1]
+            applied[k] = active[0]
+            _integrate_interval(plant, t, times[k + 1], pending, active)
+        else:
+            applied[k] = force
+            plant.advance(t, times[k + 1], force)
         if progress is not None and k % report_every == 0:
             progress(k / n_samples)
     states[n_samples] = plant.y
-    applied[n_samples] = active[0]
+    applied[n_samples] = active[0] if delayed else applied[n_samples - 1]
     columns = plant.responses(times, states, applied)
     if controller is not None:
-        columns["sliding_variable_m_s"] = internals[:, 0]
-        columns["equivalent_force_N"] = internals[:, 1]
-        columns["friction_estimate_N"] = internals[:, 2]
-        columns["force_raw_N"] = internals[:, 3]
+        columns["sliding_variable_m_s"] = sliding_variable
+        columns["equivalent_force_N"] = equivalent_force
+        columns["friction_estimate_N"] = friction_estimate
+        columns["force_raw_N"] = raw_force
     columns["force_command_N"] = applied
     if progress is not None:
         progress(1.0)

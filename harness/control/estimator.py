@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.model.bearing import BearingConfig, advance_hysteretic, friction_coefficient
+from harness.model.bearing import BearingConfig, estimator_step, friction_coefficient
 
 
 class FrictionEstimator:
@@ -48,11 +48,8 @@ class FrictionEstimator:
         first update after :meth:`reset` has no previous sample and only records
         the velocity.
         """
-        if self._started:
-            mean_velocity = 0.5 * (self._last_velocity + sliding_velocity_m_s)
-            self.nu = advance_hysteretic(self.nu, mean_velocity, dt, self._params)
+        mean_velocity = 0.5 * (self._last_velocity + sliding_velocity_m_s) if self._started else 0.0
         self._started = True
         self._last_velocity = sliding_velocity_m_s
-        self.mu = friction_coefficient(sliding_velocity_m_s, self._params)
-        self.force_N = self.mu * self._params[3] * self.nu
+        self.nu, self.mu, self.force_N = estimator_step(self.nu, mean_velocity, sliding_velocity_m_s, dt, self._params)
         return self.force_N

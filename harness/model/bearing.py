@@ -83,10 +83,22 @@ def friction_force(sliding_velocity: float, nu: float, params: np.ndarray) -> fl
 
 
 @numba.njit(cache=True)
+def _power(magnitude: float, exponent: float) -> float:
+    """``magnitude ** exponent`` by multiplication for the usual whole exponents (eta - 1 = 1, 2)."""
+    if exponent == 1.0:
+        return magnitude
+    if exponent == 2.0:
+        return magnitude * magnitude
+    if exponent == 0.0:
+        return 1.0
+    return magnitude**exponent
+
+
+@numba.njit(cache=True)
 def hysteretic_rate(sliding_velocity: float, nu: float, params: np.ndarray) -> float:
     """nudot of Eq. 5 (1/s)."""
     magnitude = abs(nu)
-    power = magnitude ** (params[ETA] - 1.0)
+    power = _power(magnitude, params[ETA] - 1.0)
     return (
         params[ALPHA] * sliding_velocity
         - params[BETA] * abs(sliding_velocity) * power * nu
@@ -126,14 +138,31 @@ def advance_hysteretic(nu: float, sliding_velocity: float, dt: float, params: np
         return nu
     direction = 1.0 if travel > 0.0 else -1.0
     distance = abs(travel) / params[YIELD]
-    if distance > _SATURATION_TRAVEL:
-        return direction * (params[ALPHA] / (params[BETA] + params[GAMMA])) ** (1.0 / params[ETA])
+    bound = (params[ALPHA] / (params[BETA] + params[GAMMA])) ** (1.0 / params[ETA])
+    if distance > _SATURATION_TRAVEL or direction * nu >= bound:
+        return direction * bound
     n_sub = int(math.ceil(distance / _SUBSTEP_TRAVEL))
     h = travel / n_sub
     for _ in range(n_sub):
+        if direction * nu >= bound * (1.0 - 1e-12):  # at the bound while loading: a fixed point
+            return direction * bound
         k1 = _travel_slope(nu, direction, params) * direction
         k2 = _travel_slope(nu + 0.5 * h * k1, direction, params) * direction
         k3 = _travel_slope(nu + 0.5 * h * k2, direction, params) * direction
         k4 = _travel_slope(nu + h * k3, direction, params) * direction
         nu += h * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
     return nu
+
+
+@numba.njit(cache=True)
+def estimator_step(nu: float, mean_velocity: float, velocity: float, dt: float, params: np.ndarray):
+    """One online-estimator step: nu advanced with the mean velocity, then mu and f at ``velocity``.
+
+    Returns
+    -------
+    nu, mu, force : float
+        Hysteretic variable, friction coefficient (Eq. 4) and friction force (Eq. 3, N).
+    """
+    nu = advance_hysteretic(nu, mean_velocity, dt, params)
+    mu = friction_coefficient(velocity, params)
+    return nu, mu, mu * params[WEIGHT] * nu

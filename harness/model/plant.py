@@ -52,6 +52,22 @@ class TableMotion:
         """Table displacement (m) and velocity (m/s) at ``t``."""
         return table_state(t, self.accel_m_s2, self.velocity_m_s, self.displacement_m, self.dt_s)
 
+    def states(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Table displacement (m) and velocity (m/s) at many times, by the same rule as :meth:`state`."""
+        times = np.asarray(times, dtype=float)
+        last = len(self.accel_m_s2) - 1
+        index = np.clip((times / self.dt_s).astype(np.int64), 0, max(last - 1, 0))
+        tau = np.clip(times - index * self.dt_s, 0.0, None)
+        a0 = self.accel_m_s2[index]
+        da = (self.accel_m_s2[np.minimum(index + 1, last)] - a0) / self.dt_s
+        v = self.velocity_m_s[index] + a0 * tau + 0.5 * da * tau**2
+        x = self.displacement_m[index] + self.velocity_m_s[index] * tau + 0.5 * a0 * tau**2 + da * tau**3 / 6.0
+        after = times >= last * self.dt_s
+        x[after], v[after] = self.displacement_m[last], 0.0
+        before = times <= 0.0
+        x[before], v[before] = self.displacement_m[0], self.velocity_m_s[0]
+        return x, v
+
     def acceleration(self, t: np.ndarray) -> np.ndarray:
         """Table acceleration (m/s^2) at times ``t`` (linear between samples, zero after the end)."""
         times = np.arange(len(self.accel_m_s2)) * self.dt_s
@@ -81,6 +97,11 @@ class Plant:
         self.y = np.zeros(self.model.size + 1)
         self._work = make_work(self.model.size + 1)
         self.steps = 0
+        m, t = self.model, table
+        self._kernel_args = (
+            m.A, m.B, m.restoring_stiffness_N_per_m, self.bearing_params,
+            t.accel_m_s2, t.velocity_m_s, t.displacement_m, t.dt_s, self.atol, self.rtol, self._work,
+        )
 
     def reset(self) -> None:
         """Back to rest: all displacements, velocities and nu zero."""
@@ -90,24 +111,22 @@ class Plant:
 
     def advance(self, t0: float, t1: float, force_N: float) -> None:
         """Integrate from ``t0`` to ``t1`` (s) with the actuator force held at ``force_N``."""
-        if t1 <= t0:
-            return
-        m = self.model
-        t = self.table
-        self.steps += advance(
-            self.y, t0, t1, force_N, m.A, m.B, m.restoring_stiffness_N_per_m, self.bearing_params,
-            t.accel_m_s2, t.velocity_m_s, t.displacement_m, t.dt_s, self.atol, self.rtol, self._work,
-        )
+        if t1 > t0:
+            self.steps += advance(self.y, t0, t1, force_N, *self._kernel_args)
 
-    def measure(self, t: float, out: Measurements) -> Measurements:
-        """Write the exact (noise-free) table and base-mat signals at ``t`` into ``out``."""
-        x0, v0 = self.table.state(t)
-        out.set(x0, v0, self.y[self.model.i_base_displacement], self.y[self.model.i_base_velocity])
+    def measure(self, t: float, out: Measurements, table_x: float | None = None, table_v: float | None = None) -> Measurements:
+        """Write the exact (noise-free) table and base-mat signals at ``t`` into ``out``.
+
+        ``table_x`` and ``table_v`` may be given when already known (precomputed at sample times).
+        """
+        if table_x is None or table_v is None:
+            table_x, table_v = self.table.state(t)
+        out.set(table_x, table_v, self.y[self.model.i_base_displacement], self.y[self.model.i_base_velocity])
         return out
 
-    def friction_force(self, t: float) -> float:
+    def friction_force(self, t: float, table_v: float | None = None) -> float:
         """The bearing friction force of the current state at ``t`` (N)."""
-        _, v0 = self.table.state(t)
+        v0 = self.table.state(t)[1] if table_v is None else table_v
         return friction_force(self.y[self.model.i_base_velocity] - v0, self.y[-1], self.bearing_params)
 
     def responses(self, times: np.ndarray, states: np.ndarray, forces: np.ndarray) -> dict[str, np.ndarray]:
@@ -129,10 +148,7 @@ class Plant:
         """
         n = self.building.n_stories
         m = self.model
-        table_x = np.empty(len(times))
-        table_v = np.empty(len(times))
-        for k, t in enumerate(times):
-            table_x[k], table_v[k] = self.table.state(float(t))
+        table_x, table_v = self.table.states(times)
         sliding_v = states[:, m.i_base_velocity] - table_v
         params = self.bearing_params
         mu = params[0] - params[1] * np.exp(-params[2] * np.abs(sliding_v))
