@@ -1,0 +1,317 @@
+"""The CAN codec: ``drivers/rig.dbc`` compiled once into fast, allocation-light encoders and decoders.
+
+cantools parses the DBC once (:func:`load_protocol`); every message is then compiled
+into a :class:`MessageCodec` that packs and unpacks its signals with plain integer
+arithmetic (the DBC's Intel layout, scale, offset, signedness and range), so a tick
+never looks anything up by name, parses, or builds a dict. Test suites check these
+codecs bit for bit against cantools' own ``Message.encode``/``decode``.
+
+Values in this API are SI (m, m/s, m/s^2, N, s) in the DBC's signal order, without
+the ``crc`` and ``counter`` signals, which the codec owns (:mod:`drivers.e2e`).
+
+The receive-side checks and counts live in :mod:`drivers.decoder`.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import cantools
+
+from drivers.e2e import parse_data_ids, profile2_crc, protect
+from harness.errors import ProtocolError
+
+#: The packaged protocol description.
+DEFAULT_DBC = Path(__file__).with_name("rig.dbc")
+#: Signals every message carries and the codec fills in itself.
+E2E_SIGNALS = ("crc", "counter")
+_F32 = struct.Struct("<f")
+_U32 = struct.Struct("<I")
+
+
+@dataclass(frozen=True, slots=True)
+class SignalLayout:
+    """One signal compiled from the DBC (Intel byte order).
+
+    ``raw_min``/``raw_max`` are the DBC's physical ``[min|max]`` converted to raw
+    integers; a received raw value outside them is out of range.
+    """
+
+    name: str
+    unit: str
+    start: int
+    length: int
+    signed: bool
+    is_float: bool
+    scale: float
+    offset: float
+    minimum: float
+    maximum: float
+    raw_min: int
+    raw_max: int
+
+    @property
+    def mask(self) -> int:
+        """Bit mask of the raw field (``2**length - 1``)."""
+        return (1 << self.length) - 1
+
+
+def _compile_signal(signal: cantools.database.can.Signal, message: str) -> SignalLayout:
+    if signal.byte_order != "little_endian":
+        raise ProtocolError(f"{message}.{signal.name}: byte order {signal.byte_order} instead of little_endian")
+    if signal.is_float and signal.length != 32:
+        raise ProtocolError(f"{message}.{signal.name}: float of {signal.length} bits instead of 32")
+    scale, offset = float(signal.scale), float(signal.offset)
+    lo_field = -(1 << (signal.length - 1)) if signal.is_signed else 0
+    hi_field = (1 << (signal.length - 1)) - 1 if signal.is_signed else (1 << signal.length) - 1
+    minimum = float(signal.minimum) if signal.minimum is not None else lo_field * scale + offset
+    maximum = float(signal.maximum) if signal.maximum is not None else hi_field * scale + offset
+    if signal.is_float:
+        raw_min, raw_max = lo_field, hi_field
+    else:
+        raw_min = max(lo_field, math.ceil((minimum - offset) / scale - 1e-6))
+        raw_max = min(hi_field, math.floor((maximum - offset) / scale + 1e-6))
+    return SignalLayout(
+        signal.name, signal.unit or "", signal.start, signal.length, signal.is_signed, signal.is_float,
+        scale, offset, minimum, maximum, raw_min, raw_max,
+    )
+
+
+class MessageCodec:
+    """Packs and unpacks one message's payload signals (SI values, DBC order, no crc/counter).
+
+    Attributes
+    ----------
+    name : str
+        Message name in the DBC, e.g. ``"TABLE_SENSORS"``.
+    frame_id : int
+        11-bit arbitration ID.
+    length : int
+        DLC in bytes.
+    data_ids : tuple of int
+        The 16 E2E profile-2 Data-IDs.
+    signals : tuple of SignalLayout
+        The payload signals, in DBC order.
+    signal_names : tuple of str
+        Their names.
+    """
+
+    def __init__(self, message: cantools.database.can.Message, data_ids: tuple[int, ...]):
+        names = [s.name for s in message.signals]
+        for required, start, length in (("crc", 0, 8), ("counter", 8, 4)):
+            sig = message.get_signal_by_name(required) if required in names else None
+            if sig is None or sig.start != start or sig.length != length:
+                raise ProtocolError(f"{message.name}: expected signal {required!r} at bit {start}, {length} bits")
+        self.name: str = message.name
+        self.frame_id: int = message.frame_id
+        self.length: int = message.length
+        self.data_ids = data_ids
+        self.signals = tuple(_compile_signal(s, message.name) for s in message.signals if s.name not in E2E_SIGNALS)
+        self.signal_names = tuple(s.name for s in self.signals)
+        self._index = {name: i for i, name in enumerate(self.signal_names)}
+        if message.is_extended_frame:
+            raise ProtocolError(f"{message.name}: extended (29-bit) ID instead of an 11-bit ID")
+        # flat per-signal tuples, so the per-frame loops touch no attributes
+        self._pack_plan = tuple(
+            (
+                s.minimum - (0.0 if s.is_float else 0.5 * s.scale), s.maximum + (0.0 if s.is_float else 0.5 * s.scale),
+                s.offset, s.scale, s.raw_min, s.raw_max, s.mask, s.start, s.is_float,
+            )
+            for s in self.signals
+        )
+        self._unpack_plan = tuple(
+            (i, s.start, s.mask, (1 << (s.length - 1)) if s.signed else 0, 1 << s.length, s.scale, s.offset,
+             s.raw_min, s.raw_max, s.is_float, s.minimum, s.maximum)
+            for i, s in enumerate(self.signals)
+        )
+
+    def index(self, signal: str) -> int:
+        """Position of ``signal`` in this message's value sequences.
+
+        Raises
+        ------
+        ProtocolError
+            If the message has no such signal.
+        """
+        try:
+            return self._index[signal]
+        except KeyError as err:
+            raise ProtocolError(f"{self.name} has no signal {signal!r}; expected one of: {', '.join(self.signal_names)}") from err
+
+    def pack(self, data: bytearray, values: Sequence[float]) -> None:
+        """Pack SI ``values`` into ``data`` in place (crc and counter bits left zero).
+
+        Raises
+        ------
+        ProtocolError
+            Wrong number of values, or a value outside the DBC range (NaN included).
+        """
+        if len(values) != len(self.signals):
+            raise ProtocolError(f"{self.name}: {len(values)} values instead of {len(self.signals)} ({', '.join(self.signal_names)})")
+        word = 0
+        for value, (lo, hi, offset, scale, raw_min, raw_max, mask, start, is_float) in zip(values, self._pack_plan):
+            if not lo <= value <= hi:
+                self._refuse(values)
+            if is_float:
+                raw = _U32.unpack(_F32.pack(value))[0]
+            else:
+                raw = round((value - offset) / scale)
+                raw = raw_min if raw < raw_min else raw_max if raw > raw_max else raw
+            word |= (raw & mask) << start
+        data[0 : self.length] = word.to_bytes(self.length, "little")
+
+    def _refuse(self, values: Sequence[float]) -> None:
+        for sig, value, plan in zip(self.signals, values, self._pack_plan):
+            if not plan[0] <= value <= plan[1]:
+                raise ProtocolError(
+                    f"{self.name}.{sig.name}: {value!r} {sig.unit} is outside {sig.minimum:g}..{sig.maximum:g} {sig.unit}"
+                )
+
+    def encode_into(self, data: bytearray, values: Sequence[float], counter: int) -> None:
+        """Pack ``values``, then write ``counter`` and the CRC (a complete, protected frame)."""
+        self.pack(data, values)
+        protect(data, counter, self.data_ids)
+
+    def encode(self, values: Sequence[float] | Mapping[str, float], counter: int) -> bytes:
+        """Convenience (allocates): a protected payload from a sequence or a name -> value mapping."""
+        if isinstance(values, Mapping):
+            unknown = set(values) - set(self.signal_names)
+            if unknown:
+                raise ProtocolError(f"{self.name} has no signal {sorted(unknown)[0]!r}; expected: {', '.join(self.signal_names)}")
+            missing = [name for name in self.signal_names if name not in values]
+            if missing:
+                raise ProtocolError(f"{self.name}: no value for signal {missing[0]!r}; expected all of: {', '.join(self.signal_names)}")
+            values = [values[name] for name in self.signal_names]
+        data = bytearray(self.length)
+        self.encode_into(data, values, counter)
+        return bytes(data)
+
+    def unpack(self, data: bytes | bytearray, out: list[float]) -> bool:
+        """Unpack every payload signal of ``data`` into ``out`` (SI); False if one is out of range.
+
+        ``data`` must already have the right length. ``out`` is filled completely
+        even when a value is out of range.
+        """
+        word = int.from_bytes(data, "little")
+        ok = True
+        for i, start, mask, sign_bit, full, scale, offset, raw_min, raw_max, is_float, lo, hi in self._unpack_plan:
+            raw = (word >> start) & mask
+            if raw & sign_bit:
+                raw -= full
+            if is_float:
+                value = _F32.unpack(_U32.pack(raw & 0xFFFFFFFF))[0]
+                if not lo <= value <= hi:
+                    ok = False
+            else:
+                value = raw * scale + offset
+                if not raw_min <= raw <= raw_max:
+                    ok = False
+            out[i] = value
+        return ok
+
+    def crc_ok(self, data: bytes | bytearray) -> bool:
+        """True when byte 0 holds the profile-2 CRC of the rest (``data`` of the right length)."""
+        return data[0] == profile2_crc(data, self.length, self.data_ids)
+
+
+class Protocol:
+    """The compiled protocol: every message of the DBC by name and by ID.
+
+    Build it with :func:`load_protocol`.
+
+    Attributes
+    ----------
+    version : int
+        The DBC's ``ProtocolVersion`` attribute.
+    path : pathlib.Path
+        The DBC it was loaded from.
+    database : cantools.database.can.Database
+        The parsed DBC (for tools and tests; the tick never touches it).
+    messages : dict of str to MessageCodec
+    by_id : dict of int to MessageCodec
+    """
+
+    def __init__(self, database: cantools.database.can.Database, path: Path):
+        self.database = database
+        self.path = path
+        attributes = database.dbc.attributes if database.dbc is not None else {}
+        if "ProtocolVersion" not in attributes:
+            raise ProtocolError(f"{path}: no ProtocolVersion attribute; expected BA_ \"ProtocolVersion\" <int>;")
+        self.version = int(attributes["ProtocolVersion"].value)
+        self.messages: dict[str, MessageCodec] = {}
+        for message in database.messages:
+            attrs = message.dbc.attributes if message.dbc is not None else {}
+            if "E2EDataIDs" not in attrs or not attrs["E2EDataIDs"].value:
+                raise ProtocolError(f"{path}: message {message.name} has no E2EDataIDs attribute; expected 16 Data-IDs")
+            try:
+                data_ids = parse_data_ids(str(attrs["E2EDataIDs"].value), message.name)
+            except ValueError as err:
+                raise ProtocolError(f"{path}: {err}") from err
+            self.messages[message.name] = MessageCodec(message, data_ids)
+        self.by_id: dict[int, MessageCodec] = {m.frame_id: m for m in self.messages.values()}
+
+    def choice(self, message: str, signal: str, label: str) -> int:
+        """The raw value of a named choice from the DBC's ``VAL_`` table (look it up once).
+
+        For example ``choice("ACTUATOR_STATUS", "drive_state", "ENABLED") == 2``.
+
+        Raises
+        ------
+        ProtocolError
+            If the message, signal or label does not exist.
+        """
+        self[message].index(signal)
+        choices = self.database.get_message_by_name(message).get_signal_by_name(signal).choices or {}
+        for value, name in choices.items():
+            if str(name) == label:
+                return int(value)
+        raise ProtocolError(
+            f"{message}.{signal} has no choice {label!r}; expected one of: {', '.join(str(n) for n in choices.values()) or 'none'}"
+        )
+
+    def __getitem__(self, name: str) -> MessageCodec:
+        try:
+            return self.messages[name]
+        except KeyError as err:
+            raise ProtocolError(f"no message {name!r} in {self.path.name}; expected one of: {', '.join(self.messages)}") from err
+
+
+def load_protocol(path: str | Path | None = None) -> Protocol:
+    """Parse a DBC with cantools and compile it (call once, at configure time).
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        The DBC; default :data:`DEFAULT_DBC` (``drivers/rig.dbc``).
+
+    Raises
+    ------
+    ProtocolError
+        If the file is missing, does not parse, or breaks the protocol's conventions.
+    """
+    dbc = Path(path) if path else DEFAULT_DBC
+    try:
+        database = cantools.database.load_file(str(dbc), database_format="dbc")
+    except FileNotFoundError as err:
+        raise ProtocolError(f"DBC file {dbc} not found") from err
+    except Exception as err:  # cantools raises several unrelated types for a bad file
+        raise ProtocolError(f"{dbc}: not a readable DBC file: {err}") from err
+    return Protocol(database, dbc)
+
+
+def check_protocol_version(protocol: Protocol, expected: int) -> None:
+    """Refuse a DBC whose ``ProtocolVersion`` differs from the one the profile names.
+
+    Raises
+    ------
+    ProtocolError
+        Naming both versions.
+    """
+    if protocol.version != expected:
+        raise ProtocolError(
+            f"the profile names CAN protocol version {expected} but {protocol.path} is version {protocol.version}"
+        )

@@ -1,0 +1,87 @@
+"""The ``can:`` section of a profile: interface, channel, bitrate, protocol version and message rates.
+
+Defaults fit 500 Hz control on a 1 Mbit/s bus with about 30 % load (see
+:mod:`drivers.busload`). Every periodic message of ``drivers/rig.dbc`` takes its
+rate from one field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
+control) are budgeted at the rate they may burst at.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from harness.schema import quantity
+
+#: DBC message name -> the CanConfig field holding its rate (Hz).
+RATE_FIELDS: dict[str, str] = {
+    "ESTOP": "estop_rate_hz",
+    "ACTUATOR_CMD": "command_rate_hz",
+    "TABLE_SENSORS": "sensor_rate_hz",
+    "BASE_SENSORS": "sensor_rate_hz",
+    "ACTUATOR_STATUS": "status_rate_hz",
+    "HEARTBEAT": "heartbeat_rate_hz",
+    "STORY_DRIFTS": "story_sensor_rate_hz",
+    "FLOOR_ACCELS": "story_sensor_rate_hz",
+    "RIG_CONTROL": "rig_control_rate_hz",
+    "RIG_STATUS": "rig_status_rate_hz",
+}
+
+#: The protocol version of the packaged drivers/rig.dbc.
+CURRENT_PROTOCOL_VERSION = 1
+
+
+@dataclass(frozen=True)
+class CanConfig:
+    """CAN bus and protocol settings (profile section ``can``).
+
+    Attributes
+    ----------
+    interface : str
+        Any python-can interface name: ``virtual``, ``socketcan``, ``pcan``, ``kvaser``, ...
+    channel : str
+        Interface channel: ``vcan0``/``can0`` for socketcan, a shared name for virtual.
+    bitrate_bps : int
+        Nominal bitrate (bit/s). socketcan takes it from ``ip link``; it still sets the bus-load budget.
+    max_bus_load : float
+        Largest allowed share of the bitrate (0..1) the configured messages may need.
+    protocol_version : int
+        The DBC ``ProtocolVersion`` this profile was written for; a different DBC is refused.
+    sensor_rate_hz ... rig_control_rate_hz : float
+        Rates of the messages (Hz); see :data:`RATE_FIELDS`.
+    timestamp_source : {"poll", "message"}
+        Receive time of a sample: the ``now`` passed to ``poll`` (default; same clock
+        as the loop), or the frame's own ``msg.timestamp`` (wall-clock epoch seconds
+        for socketcan and virtual: the loop must then use that clock too).
+    max_frames_per_poll : int
+        Upper bound of frames one ``poll`` handles, so a flooded bus cannot stall a tick.
+    dbc_path : str
+        DBC file; empty means the packaged ``drivers/rig.dbc``.
+    """
+
+    interface: str = quantity("virtual", doc="python-can interface (virtual, socketcan, pcan, kvaser, ...)")
+    channel: str = quantity("harness", doc="interface channel, e.g. vcan0, can0, PCAN_USBBUS1")
+    bitrate_bps: int = quantity(1_000_000, gt=0, le=1_000_000, doc="CAN bitrate (classic CAN)")
+    max_bus_load: float = quantity(0.5, gt=0.0, le=1.0, doc="largest allowed share of the bitrate")
+    protocol_version: int = quantity(CURRENT_PROTOCOL_VERSION, ge=0, doc="ProtocolVersion the profile expects of the DBC")
+    sensor_rate_hz: float = quantity(500.0, unit="Hz", gt=0.0, le=10_000.0, doc="TABLE_SENSORS and BASE_SENSORS rate")
+    story_sensor_rate_hz: float = quantity(250.0, unit="Hz", gt=0.0, le=10_000.0, doc="STORY_DRIFTS and FLOOR_ACCELS rate")
+    command_rate_hz: float = quantity(500.0, unit="Hz", gt=0.0, le=10_000.0, doc="ACTUATOR_CMD rate (the control rate)")
+    status_rate_hz: float = quantity(250.0, unit="Hz", gt=0.0, le=10_000.0, doc="ACTUATOR_STATUS rate")
+    heartbeat_rate_hz: float = quantity(100.0, unit="Hz", gt=0.0, le=10_000.0, doc="HEARTBEAT rate")
+    estop_rate_hz: float = quantity(100.0, unit="Hz", gt=0.0, le=10_000.0, doc="ESTOP repetition rate while active (budgeted)")
+    rig_status_rate_hz: float = quantity(50.0, unit="Hz", gt=0.0, le=10_000.0, doc="RIG_STATUS rate (virtual rig)")
+    rig_control_rate_hz: float = quantity(10.0, unit="Hz", gt=0.0, le=10_000.0, doc="RIG_CONTROL burst rate (budgeted)")
+    timestamp_source: Literal["poll", "message"] = quantity("poll", doc="receive time: poll's now, or msg.timestamp")
+    max_frames_per_poll: int = quantity(256, gt=0, doc="frames one poll handles at most")
+    dbc_path: str = quantity("", doc="DBC file; empty = packaged drivers/rig.dbc")
+
+    def __post_init__(self) -> None:
+        if not self.interface.strip():
+            raise ValueError("interface is empty; expected a python-can interface name such as 'virtual' or 'socketcan'")
+        if not self.channel.strip():
+            raise ValueError("channel is empty; expected a channel such as 'vcan0'")
+
+    def rates_hz(self) -> dict[str, float]:
+        """Message name -> configured rate (Hz), for every message in :data:`RATE_FIELDS`."""
+        return {name: float(getattr(self, field)) for name, field in RATE_FIELDS.items()}

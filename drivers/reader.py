@@ -1,0 +1,348 @@
+"""Receive side: poll the bus inside the tick and keep the latest valid sample of each message.
+
+The loop calls :meth:`FrameReader.poll` once per tick; it drains the bus with
+``bus.recv(timeout=0)`` (no Notifier thread: a thread adds ~80 us median and
+milliseconds at the tail, see DESIGN.md), decodes every frame through the
+:class:`~drivers.codec.Decoder`, and updates preallocated :class:`Sample` objects
+in place. Besides the samples it keeps:
+
+- error-frame and bus-off accounting in a shared :class:`~drivers.bus.BusHealth`;
+- frames on "foreign" IDs, by default the actuator command: any such frame that this
+  process did not send means another node is commanding the actuator (a pre-arm
+  check refuses to arm while :attr:`ReaderCounters.foreign_commands` is non-zero).
+  This relies on the bus not echoing our own frames, python-can's default
+  (``receive_own_messages=False``); never open the harness bus with it on;
+- E-stop frames: a valid frame with ``active=1`` latches :attr:`FrameReader.estop_requested`,
+  and so does any malformed frame on the E-stop ID (fail-safe: a stop request
+  that arrives damaged is still a stop request). Only :meth:`FrameReader.clear_estop` clears it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import can
+
+from drivers.bus import BusHealth
+from drivers.codec import Protocol
+from drivers.decoder import Decoder, RxStatus
+from drivers.config import CanConfig
+from harness.errors import BusError, ProtocolError
+from harness.signals import Measurements
+
+#: What the harness receives (sensors, actuator status, rig status, E-stop).
+HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
+#: What the rig (servo controller and virtual rig) receives.
+RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP")
+ESTOP_MESSAGE = "ESTOP"
+
+
+class Sample:
+    """The latest accepted values of one message, with receive time and count.
+
+    Attributes
+    ----------
+    name : str
+        Message name.
+    values : list of float
+        SI values in DBC signal order (updated in place; hold on to the list).
+    rx_time : float
+        Receive time of the latest accepted frame (s, the reader's clock), NaN before the first.
+    count : int
+        Accepted frames.
+    fresh : bool
+        A frame was accepted during the latest :meth:`FrameReader.poll`.
+    last_status : RxStatus
+        Outcome of the newest frame on this ID, accepted or not (``OK`` before the first).
+    """
+
+    __slots__ = ("name", "values", "rx_time", "count", "fresh", "last_status", "_index")
+
+    def __init__(self, name: str, values: list[float], index: dict[str, int]):
+        self.name = name
+        self.values = values
+        self.rx_time = math.nan
+        self.count = 0
+        self.fresh = False
+        self.last_status = RxStatus.OK
+        self._index = index
+
+    def age(self, now: float) -> float:
+        """Seconds since the latest accepted frame; infinity when none arrived yet."""
+        return now - self.rx_time if self.count else math.inf
+
+    def index(self, signal: str) -> int:
+        """Position of ``signal`` in :attr:`values` (look it up once, outside the tick)."""
+        try:
+            return self._index[signal]
+        except KeyError as err:
+            raise ProtocolError(f"{self.name} has no signal {signal!r}; expected one of: {', '.join(self._index)}") from err
+
+    def __getitem__(self, signal: str) -> float:
+        """Value of ``signal`` by name (convenience; use :meth:`index` in the tick)."""
+        return self.values[self.index(signal)]
+
+
+class ReaderCounters:
+    """Counts kept by a reader beyond the decoder's per-status counts.
+
+    Attributes
+    ----------
+    frames : int
+        Frames taken off the bus (all kinds).
+    polls_capped : int
+        Polls that stopped at ``max_frames`` with frames possibly left in the queue.
+    foreign_commands : int
+        Frames on a foreign ID (the actuator command) not sent by this process.
+    estop_frames : int
+        Frames on the E-stop ID, valid or not.
+    last_foreign_time, last_estop_time : float
+        Reader-clock time of the latest of each (s), NaN if none.
+    """
+
+    __slots__ = ("frames", "polls_capped", "foreign_commands", "estop_frames", "last_foreign_time", "last_estop_time")
+
+    def __init__(self) -> None:
+        self.frames = 0
+        self.polls_capped = 0
+        self.foreign_commands = 0
+        self.estop_frames = 0
+        self.last_foreign_time = math.nan
+        self.last_estop_time = math.nan
+
+
+class FrameReader:
+    """Drains a bus each tick and keeps the latest valid sample of each received message.
+
+    Parameters
+    ----------
+    bus : can.BusABC
+        An open bus (see :func:`drivers.bus.open_bus`).
+    protocol : Protocol
+        The compiled DBC.
+    names : sequence of str
+        Messages this node receives (:data:`HARNESS_RX` or :data:`RIG_RX`).
+    foreign : sequence of str
+        IDs that only this node's side may send; frames on them are counted, not decoded.
+    health : BusHealth, optional
+        Shared with the writer; a new one by default.
+    use_msg_timestamp : bool
+        Take the receive time from ``msg.timestamp`` instead of ``now``.
+    max_frames : int
+        Most frames one :meth:`poll` handles.
+    """
+
+    def __init__(
+        self,
+        bus: can.BusABC,
+        protocol: Protocol,
+        names: Sequence[str],
+        *,
+        foreign: Sequence[str] = (),
+        health: BusHealth | None = None,
+        use_msg_timestamp: bool = False,
+        max_frames: int = 256,
+    ):
+        if max_frames < 1:
+            raise ValueError(f"max_frames is {max_frames}; expected at least 1")
+        self.bus = bus
+        self.protocol = protocol
+        self.decoder = Decoder(protocol, names)
+        self.health = health if health is not None else BusHealth()
+        self.counters = ReaderCounters()
+        self.use_msg_timestamp = use_msg_timestamp
+        self.max_frames = max_frames
+        self.estop_requested = False
+        self._samples = {
+            protocol[n].frame_id: Sample(n, self.decoder.values(n), {s: i for i, s in enumerate(protocol[n].signal_names)})
+            for n in names
+        }
+        self._by_name = {s.name: s for s in self._samples.values()}
+        self._sample_list = tuple(self._samples.values())
+        self._foreign_ids = frozenset(protocol[n].frame_id for n in foreign)
+        estop = protocol.messages.get(ESTOP_MESSAGE)
+        self._estop_id = estop.frame_id if estop is not None and ESTOP_MESSAGE in names else -1
+        self._estop_active = estop.index("active") if estop is not None else 0
+        self._estop_scratch = [0.0] * (len(estop.signals) if estop is not None else 0)
+
+    def sample(self, name: str) -> Sample:
+        """The :class:`Sample` of message ``name`` (the same object for the whole run)."""
+        try:
+            return self._by_name[name]
+        except KeyError as err:
+            raise ProtocolError(f"this reader does not receive {name!r}; it receives: {', '.join(self._by_name)}") from err
+
+    def age(self, name: str, now: float) -> float:
+        """Seconds since the latest accepted frame of ``name`` (infinity if none)."""
+        return self.sample(name).age(now)
+
+    @property
+    def e2e_rejects(self) -> int:
+        """Frames rejected by the E2E checks so far: wrong length, bad CRC, repeated or skipped counter."""
+        counts = self.decoder.counts
+        return (
+            counts[RxStatus.WRONG_LENGTH] + counts[RxStatus.BAD_CRC]
+            + counts[RxStatus.REPEATED_COUNTER] + counts[RxStatus.SKIPPED_COUNTER]
+        )
+
+    def e2e_ok(self) -> bool:
+        """True when the newest frame of every received message passed all checks."""
+        for sample in self._sample_list:
+            if sample.last_status != RxStatus.OK:
+                return False
+        return True
+
+    @property
+    def foreign_command_seen(self) -> bool:
+        """True once any frame on a foreign ID arrived from another node."""
+        return self.counters.foreign_commands > 0
+
+    def clear_estop(self) -> None:
+        """Deliberately clear the latched E-stop request (the operator's reset)."""
+        self.estop_requested = False
+
+    def poll(self, now: float) -> int:
+        """Handle every frame waiting on the bus (at most ``max_frames``).
+
+        Parameters
+        ----------
+        now : float
+            The loop's current time (s); receive time of the frames unless ``use_msg_timestamp``.
+
+        Returns
+        -------
+        int
+            Frames handled (all kinds, valid or not).
+
+        Raises
+        ------
+        BusError
+            When the bus itself fails (closed, interface gone).
+        """
+        handled = 0
+        recv = self.bus.recv
+        for sample in self._sample_list:
+            sample.fresh = False
+        while handled < self.max_frames:
+            try:
+                msg = recv(timeout=0)
+            except (can.CanError, OSError, ValueError) as err:  # ValueError: select() on a closed socket
+                raise BusError(f"receiving from the CAN bus failed: {err}") from err
+            if msg is None:
+                break
+            handled += 1
+            self._handle(msg, msg.timestamp if self.use_msg_timestamp else now)
+        else:
+            self.counters.polls_capped += 1
+        self.counters.frames += handled
+        return handled
+
+    def _handle(self, msg: can.Message, t: float) -> None:
+        if msg.is_error_frame:
+            self.health.note_error_frame(msg, t)
+            return
+        frame_id = msg.arbitration_id
+        if frame_id in self._foreign_ids and not msg.is_extended_id:
+            # Every such frame is someone else's: the bus does not echo our own frames
+            # (receive_own_messages=False). msg.is_rx cannot tell: socketcan marks frames
+            # from any process on this host is_rx=False (MSG_DONTROUTE), not only ours.
+            self.counters.foreign_commands += 1
+            self.counters.last_foreign_time = t
+            return
+        extended = msg.is_extended_id
+        status = self.decoder.decode(
+            frame_id, msg.data, is_data_frame=not (msg.is_remote_frame or msg.is_fd), extended=extended
+        )
+        sample = None if extended else self._samples.get(frame_id)
+        if sample is not None:
+            sample.last_status = status
+            if status == RxStatus.OK:
+                sample.rx_time = t
+                sample.count += 1
+                sample.fresh = True
+        if frame_id == self._estop_id and not extended:
+            self._note_estop(status, msg.data, t)
+
+    def _note_estop(self, status: RxStatus, data: bytearray, t: float) -> None:
+        self.counters.estop_frames += 1
+        self.counters.last_estop_time = t
+        if status == RxStatus.OK:
+            active = self._samples[self._estop_id].values[self._estop_active]
+        elif status in (RxStatus.REPEATED_COUNTER, RxStatus.SKIPPED_COUNTER, RxStatus.OUT_OF_RANGE):
+            codec = self.protocol.by_id[self._estop_id]
+            codec.unpack(data, self._estop_scratch)  # CRC and length are fine here
+            active = self._estop_scratch[self._estop_active]
+        else:
+            active = 1.0  # damaged stop request: fail safe
+        if active:
+            self.estop_requested = True
+
+
+class HarnessReader(FrameReader):
+    """The harness side: sensors, actuator status, rig status, E-stop; foreign actuator commands.
+
+    Parameters
+    ----------
+    bus : can.BusABC
+    protocol : Protocol
+    config : CanConfig
+        ``timestamp_source`` and ``max_frames_per_poll`` are used.
+    health : BusHealth, optional
+    """
+
+    def __init__(self, bus: can.BusABC, protocol: Protocol, config: CanConfig, health: BusHealth | None = None):
+        super().__init__(
+            bus, protocol, HARNESS_RX, foreign=("ACTUATOR_CMD",), health=health,
+            use_msg_timestamp=config.timestamp_source == "message", max_frames=config.max_frames_per_poll,
+        )
+        self.table = self.sample("TABLE_SENSORS")
+        self.base = self.sample("BASE_SENSORS")
+        self.status = self.sample("ACTUATOR_STATUS")
+        self._x0, self._xd0 = self.table.index("x_0"), self.table.index("xdot_0")
+        self._yb, self._ydb = self.base.index("y_b"), self.base.index("ydot_b")
+        status = self.status
+        self._drive, self._pressure = status.index("drive_state"), status.index("pressure_ok")
+        self._fault, self._force = status.index("fault_code"), status.index("force_measured")
+
+    @property
+    def drive_state(self) -> int:
+        """Latest ACTUATOR_STATUS drive state (0 off, 1 ready, 2 enabled, 3 fault, 4 estop; 0 before any frame)."""
+        return int(self.status.values[self._drive])
+
+    @property
+    def pressure_ok(self) -> bool:
+        """Latest hydraulic-pressure-ok flag (False before any frame)."""
+        return bool(self.status.values[self._pressure])
+
+    @property
+    def fault_code(self) -> int:
+        """Latest servo fault code (0 none)."""
+        return int(self.status.values[self._fault])
+
+    @property
+    def measured_force_n(self) -> float:
+        """Latest load-cell force reported by the servo controller (N)."""
+        return self.status.values[self._force]
+
+    def fill(self, measurements: Measurements) -> None:
+        """Copy the latest x_0, xdot_0, y_b, ydot_b into ``measurements`` in place (SI)."""
+        table, base = self.table.values, self.base.values
+        measurements.set(table[self._x0], table[self._xd0], base[self._yb], base[self._ydb])
+
+    def sensor_age(self, now: float) -> float:
+        """Age of the older of the table and base-mat samples (s; infinity before both arrived)."""
+        return max(self.table.age(now), self.base.age(now))
+
+
+class RigReader(FrameReader):
+    """The rig side (virtual rig, servo controller): commands, heartbeat, rig control, E-stop."""
+
+    def __init__(self, bus: can.BusABC, protocol: Protocol, config: CanConfig, health: BusHealth | None = None):
+        super().__init__(
+            bus, protocol, RIG_RX, health=health,
+            use_msg_timestamp=config.timestamp_source == "message", max_frames=config.max_frames_per_poll,
+        )
+        self.command = self.sample("ACTUATOR_CMD")
+        self.heartbeat = self.sample("HEARTBEAT")
+        self.control = self.sample("RIG_CONTROL")

@@ -1,0 +1,1 @@
+"""Tests that need a real SocketCAN ``vcan0`` (run ``pytest -m vcan tests/vcan``, or scripts/with-vcan)."""

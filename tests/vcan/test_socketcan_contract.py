@@ -1,0 +1,26 @@
+"""The driver contract (tests/unit/test_bus_contract.py) on real SocketCAN: ``vcan0``.
+
+Same test bodies as the virtual-interface run; only the two fixtures differ. Skipped,
+naming scripts/with-vcan, where ``/sys/class/net/vcan0`` does not exist.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from drivers.config import CanConfig
+from tests.unit.test_bus_contract import BusContract
+
+pytestmark = pytest.mark.vcan
+
+
+class TestSocketcanContract(BusContract):
+    """The contract on the kernel's SocketCAN ``vcan0``."""
+
+    @pytest.fixture
+    def config(self, vcan_channel: str) -> CanConfig:
+        return CanConfig(interface="socketcan", channel=vcan_channel)
+
+    @pytest.fixture
+    def nonexistent(self, vcan_channel: str) -> tuple[CanConfig, str]:
+        return CanConfig(interface="socketcan", channel="vcan_nonexist"), r"ip link add dev vcan_nonexist type vcan"
