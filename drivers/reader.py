@@ -20,7 +20,7 @@ in place. Besides the samples it keeps:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import can
 
@@ -154,6 +154,9 @@ class FrameReader:
         self.use_msg_timestamp = use_msg_timestamp
         self.max_frames = max_frames
         self.estop_requested = False
+        #: Called with every received frame (valid or not) before it is decoded, e.g. the
+        #: run recorder's CAN log; must copy what it keeps (python-can may reuse the object).
+        self.tap: Callable[[can.Message], object] | None = None
         self._samples = {
             protocol[n].frame_id: Sample(n, self.decoder.values(n), {s: i for i, s in enumerate(protocol[n].signal_names)})
             for n in names
@@ -232,6 +235,8 @@ class FrameReader:
             if msg is None:
                 break
             handled += 1
+            if self.tap is not None:
+                self.tap(msg)
             self._handle(msg, msg.timestamp if self.use_msg_timestamp else now)
         else:
             self.counters.polls_capped += 1

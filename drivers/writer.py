@@ -13,7 +13,7 @@ return value, so the tick decides what to do (the supervisor trips on it).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import can
 
@@ -73,6 +73,9 @@ class FrameWriter:
         self.bus = bus
         self.health = health if health is not None else BusHealth()
         self._frames = {name: TxFrame(protocol[name]) for name in names}
+        #: Called with every frame the bus took, e.g. the run recorder's CAN log;
+        #: must copy what it keeps (the frame object is reused for the next send).
+        self.tap: Callable[[can.Message], object] | None = None
 
     def frame(self, name: str) -> TxFrame:
         """The :class:`TxFrame` of message ``name``."""
@@ -113,6 +116,8 @@ class FrameWriter:
             return False
         tx.counter = (tx.counter + 1) % COUNTER_MODULO
         tx.sent += 1
+        if self.tap is not None:
+            self.tap(msg)
         return True
 
 

@@ -67,6 +67,50 @@ def _add_simulate(sub) -> None:
     parser.set_defaults(handler=_cmd_simulate)
 
 
+def _add_report(sub) -> None:
+    parser = sub.add_parser(
+        "report",
+        help="tables and plots from run folders",
+        description=(
+            "Build the peak-response tables (with %% reduction for passive/controlled pairs and a "
+            "comparison for two runs of the same record), plots (drift histories, table motion, "
+            "bearing hysteresis, stroke against its limits, forces, sliding variable, loop timing) "
+            "and one self-contained HTML page from one or more run folders "
+            "(harness dry-run / run / simulate --out)."
+        ),
+        epilog="example:\n  harness report logs/2026-11-22T03-10-05_nceer_4dof_dry-run study/ --out report/\n\n" + EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("runs", nargs="+", metavar="RUN", help="run folder, or a simulate --out folder of cases")
+    parser.add_argument("--out", metavar="DIR", help="where to write (default: RUN/report)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(handler=_cmd_report)
+
+
+def _add_records(sub) -> None:
+    parser = sub.add_parser(
+        "records",
+        help="list ground-motion records, or show one after processing",
+        description=(
+            "With no NAME, list the named records and whether their files are in the records "
+            "directory. With a NAME or PATH, process it as a run would (time scale, duration, PGA, "
+            "baseline correction) and show PGA, PGV, PGD, duration, Arias intensity, significant "
+            "duration and periods; --plot writes a PNG of acceleration, velocity and displacement."
+        ),
+        epilog="example:\n  harness records el_centro --records-dir ../shared/data/ground_motions --pga 0.34 "
+        "--time-scale 2 --plot el_centro.png\n\n" + EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("record", nargs="?", metavar="NAME|PATH")
+    parser.add_argument("--profile", help="take scaling and the table's limits from this profile")
+    parser.add_argument("--records-dir", metavar="DIR", help="where named records are found")
+    parser.add_argument("--pga", type=float, metavar="G", help="scale to this PGA (g)")
+    parser.add_argument("--time-scale", type=float, metavar="F", help="compress time by F")
+    parser.add_argument("--duration", type=float, metavar="S", help="cut to this length (s)")
+    parser.add_argument("--plot", metavar="PNG", help="write a plot of the processed motion")
+    parser.set_defaults(handler=_cmd_records)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (also used to render --help in the docs)."""
     parser = argparse.ArgumentParser(
@@ -80,6 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_simulate(sub)
+    _add_report(sub)
+    _add_records(sub)
     return parser
 
 
@@ -137,6 +183,71 @@ def _cmd_simulate(args: argparse.Namespace, console: Console) -> int:
 
         folder = write_study_folders(result, args.out)
         console.print(f"wrote time series to {folder}")
+    return exit_codes.OK
+
+
+def _cmd_report(args: argparse.Namespace, console: Console) -> int:
+    from harness.report import build_report, summary_text
+
+    with _progress(console, not args.quiet) as progress:
+        task = progress.add_task("report", total=1.0)
+
+        def report(message: str, done: int, total: int) -> None:
+            progress.update(task, description=message[:12], completed=done / max(total, 1))
+
+        result = build_report(args.runs, args.out, progress=report)
+    console.print(summary_text(result), highlight=False, markup=False)
+    for warning in result.warnings:
+        console.print(f"[yellow]warning:[/] {escape(warning)}")
+    console.print(f"wrote {len(result.plots)} plots and {result.html_path}")
+    return exit_codes.OK
+
+
+def _cmd_records(args: argparse.Namespace, console: Console) -> int:
+    from rich.table import Table
+
+    from harness.profile import load_profile
+    from harness.records import list_records, records_dir_from, summarize
+    from harness.study import StudyOptions, prepare_motion
+
+    profile = load_profile(args.profile)
+    if args.record is None:
+        directory = records_dir_from(args.records_dir, profile.record.records_dir, base_dir=profile.base_dir)
+        table = Table(title=f"records in {directory or '(no records directory set)'}", title_justify="left")
+        for column in ("name", "available", "file", "description"):
+            table.add_column(column)
+        for item in list_records(directory):
+            table.add_row(item.name, "yes" if item.available else "[red]no[/]", str(item.path or "-"), item.description)
+        console.print(table)
+        console.print("Set the directory with --records-dir, $HARNESS_RECORDS_DIR or the profile's record.records_dir.")
+        return exit_codes.OK
+    options = StudyOptions(record=args.record, records_dir=args.records_dir, pga_g=args.pga,
+                           time_scale=args.time_scale, duration_s=args.duration)
+    motion = prepare_motion(profile, options)
+    facts = summarize(motion)
+    table = Table(title=f"{motion.name} after processing ({profile.name})", title_justify="left")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    rows = [
+        ("PGA", f"{facts.pga_g:.4f} g"), ("PGV", f"{facts.pgv_m_s:.4f} m/s"), ("PGD", f"{facts.pgd_m * 1e3:.2f} mm"),
+        ("duration", f"{facts.duration_s:.2f} s"), ("time step", f"{facts.dt_s * 1e3:.3f} ms"),
+        ("time scale", f"{motion.time_scale:g}"), ("Arias intensity", f"{facts.arias_intensity_m_s:.4f} m/s"),
+        ("significant duration (5-95 %)", f"{facts.significant_duration_s:.2f} s ({facts.t5_s:.2f}-{facts.t95_s:.2f} s)"),
+        ("predominant period", f"{facts.predominant_period_s:.3f} s"), ("mean period", f"{facts.mean_period_s:.3f} s"),
+    ]
+    for name, value in rows:
+        table.add_row(name, value)
+    console.print(table)
+    for note in motion.notes:
+        console.print(f"  note: {escape(note)}")
+    if profile.table is not None:
+        console.print(f"fits the table of {profile.name} (stroke {profile.table.stroke_limit_m * 1e3:.0f} mm, "
+                      f"{profile.table.velocity_limit_m_s:g} m/s, {profile.table.acceleration_limit_g:g} g)")
+    if args.plot:
+        from harness.report.motion_plot import motion_plot
+
+        plot = motion_plot(motion, args.plot)
+        console.print(f"wrote {plot.path}")
     return exit_codes.OK
 
 

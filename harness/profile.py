@@ -27,11 +27,14 @@ from typing import Any
 
 import yaml
 
+from drivers.config import CanConfig
 from harness.control.config import ControlConfig, SimulationConfig
 from harness.errors import ProfileError
+from harness.loop.config import LoopConfig
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
 from harness.records import RecordConfig, TableLimits
+from harness.safety.config import SafetyConfig
 from harness.schema import build, internal, quantity, to_data
 
 PROFILE_DIR = Path(__file__).resolve().parent.parent / "profiles"
@@ -51,6 +54,9 @@ class Profile:
     record: RecordConfig = dataclasses.field(default_factory=RecordConfig)
     table: TableLimits | None = None
     simulation: SimulationConfig = dataclasses.field(default_factory=SimulationConfig)
+    can: CanConfig = dataclasses.field(default_factory=CanConfig)
+    safety: SafetyConfig = dataclasses.field(default_factory=SafetyConfig)
+    loop: LoopConfig = dataclasses.field(default_factory=LoopConfig)
     variants: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     source_path: str = internal("", "the file this profile was loaded from")
     variant: str = internal("", "the variant applied, if any")

@@ -1,0 +1,185 @@
+"""One tick of the control loop: read -> estimate -> control -> supervise -> write -> record.
+
+Everything the tick touches is allocated before the run: the measurement record, the
+health record, the row, the drivers' frames and samples. Controllers, the estimator
+and the supervisor get the loop's ``t`` and ``dt``; nothing here reads a clock except
+through the ``now`` it is given. An exception from the estimator or the controller
+trips the run (zero force, drive disabled) and never escapes with the drive enabled.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from harness.errors import HarnessError
+from harness.loop.row import COLUMNS, INDEX, N_STORIES
+from harness.safety.health import TickHealth
+from harness.safety.lifecycle import State
+from harness.safety.supervisor import SupervisedCommand, Supervisor
+
+DRIVE_READY, DRIVE_ENABLED, DRIVE_FAULT = 1, 2, 3
+_ROW_T, _ROW_STATE = INDEX["t_s"], INDEX["state"]
+
+
+class ControlTick:
+    """The work of one tick, wired once to the link, controller, estimator, supervisor and recorder.
+
+    Parameters
+    ----------
+    link : drivers.link.HarnessLink
+        Reader (polls the bus itself) and writer of the harness side.
+    controller : object
+        ``update(t, dt, meas, friction_N, state) -> force`` with visible internals.
+    estimator : FrictionEstimator
+    supervisor : Supervisor
+    recorder : object, optional
+        Has ``record_row(row)`` and ``record_event(t, kind, name, detail)`` (a RunFolder).
+    heartbeat_every : int
+        Send the heartbeat every this many ticks.
+    """
+
+    def __init__(self, link, controller, estimator, supervisor: Supervisor, recorder=None, heartbeat_every: int = 5):
+        self.reader = link.reader
+        self.writer = link.writer
+        self.bus_health = link.reader.health
+        self.controller = controller
+        self.estimator = estimator
+        self.supervisor = supervisor
+        self.recorder = recorder
+        self.health = TickHealth()
+        self.meas = self.health.meas
+        self.row = np.zeros(len(COLUMNS))
+        self.heartbeat_every = max(1, int(heartbeat_every))
+        self.ticks = 0
+        self.last_event = ""
+        self.command: SupervisedCommand = supervisor.command
+        reader = self.reader
+        self._table, self._base, self._status = reader.table, reader.base, reader.status
+        self._drifts, self._accels = reader.sample("STORY_DRIFTS"), reader.sample("FLOOR_ACCELS")
+        self._xdd0 = self._table.index("xddot_0")
+        self._yddb = self._base.index("yddot_b")
+        self._drift_i = tuple(self._drifts.index(f"drift_{j}") for j in range(1, N_STORIES + 1))
+        self._accel_i = tuple(self._accels.index(f"accel_{j}") for j in range(1, N_STORIES + 1))
+        self._sink = self._record_event if recorder is not None else self._keep_event
+
+    # ------------------------------------------------------------------ read
+    def read(self, now: float, consecutive_overruns: int) -> None:
+        """Poll the bus and update the measurement and health records in place."""
+        health = self.health
+        try:
+            self.reader.poll(now)
+        except HarnessError:
+            health.bus_gone = True
+        self.reader.fill(self.meas)
+        table, base, status = self._table, self._base, self._status
+        health.table_fresh = table.fresh
+        health.base_fresh = base.fresh
+        health.table_age_s = table.age(now)
+        health.base_age_s = base.age(now)
+        health.e2e_ok = self.reader.e2e_ok()
+        health.e2e_rejects = self.reader.e2e_rejects
+        bus = self.bus_health
+        health.error_frames = bus.error_frames
+        health.error_passive = bus.state.name == "PASSIVE"
+        health.bus_off = bus.state.name == "ERROR"
+        health.send_failures = bus.send_failures
+        health.foreign_command = self.reader.foreign_command_seen
+        drive = self.reader.drive_state
+        health.drive_ready = drive in (DRIVE_READY, DRIVE_ENABLED)
+        health.drive_fault = drive == DRIVE_FAULT
+        health.pressure_ok = self.reader.pressure_ok
+        health.actuator_status_age_s = status.age(now)
+        health.measured_force_N = self.reader.measured_force_n
+        health.estop = self.reader.estop_requested
+        health.consecutive_overruns = consecutive_overruns
+
+    # ------------------------------------------------------------------ the tick
+    def run(self, t: float, dt: float, now: float, lateness_s: float = 0.0, consecutive_overruns: int = 0) -> SupervisedCommand:
+        """Run one tick at loop time ``t`` (s) with step ``dt`` (s); ``now`` is the drivers' clock (s)."""
+        started = time.perf_counter()
+        self.read(now, consecutive_overruns)
+        supervisor = self.supervisor
+        friction = raw = math.nan
+        try:
+            friction = self.estimator.update(t, dt, self.meas.sliding_velocity_m_s)
+            raw = self.controller.update(t, dt, self.meas, friction, None)
+            command = supervisor.update(t, dt, self.health, raw)
+        except Exception as exc:  # noqa: BLE001 - any failure in the tick trips; it never kills the process
+            command = supervisor.report_exception(t, exc)
+        self.write(command, now)
+        self.ticks += 1
+        supervisor.events.drain(self._sink)
+        self._fill_row(t, command, friction, raw, lateness_s, time.perf_counter() - started, consecutive_overruns > 0)
+        if self.recorder is not None:
+            self.recorder.record_row(self.row)
+        return command
+
+    def write(self, command: SupervisedCommand, now: float) -> None:
+        """Send the supervised command (the only path to the actuator) and the heartbeat."""
+        try:
+            self.writer.command(command.force_N, command.enable, now)
+            if self.ticks % self.heartbeat_every == 0:
+                self.writer.heartbeat(int(command.state), now)
+        except HarnessError as exc:  # a value the DBC cannot carry: never send it, trip instead
+            self.supervisor.report_exception(now, exc)
+            self.writer.command(0.0, False, now)
+
+    def send_disable(self, now: float) -> None:
+        """Command zero force with the drive disabled, whatever the state (used on the way out)."""
+        try:
+            self.writer.command(0.0, False, now)
+            self.writer.heartbeat(int(self.supervisor.state), now)
+        except HarnessError:
+            pass
+
+    # ------------------------------------------------------------------ record
+    def _fill_row(self, t, command, friction, raw, lateness, compute, overrun) -> None:
+        row, meas = self.row, self.meas
+        table, base = self._table.values, self._base.values
+        row[0] = t
+        row[1] = int(command.state)
+        row[2] = meas.table_displacement_m
+        row[3] = meas.table_velocity_m_s
+        row[4] = table[self._xdd0]
+        row[5] = meas.base_displacement_m
+        row[6] = meas.base_velocity_m_s
+        row[7] = base[self._yddb]
+        row[8] = meas.sliding_displacement_m
+        row[9] = meas.sliding_velocity_m_s
+        drifts, accels = self._drifts.values, self._accels.values
+        for j in range(N_STORIES):
+            row[10 + j] = drifts[self._drift_i[j]]
+            row[10 + N_STORIES + j] = accels[self._accel_i[j]]
+        k = 10 + 2 * N_STORIES
+        controller = self.controller
+        row[k] = self.estimator.nu
+        row[k + 1] = friction
+        row[k + 2] = controller.sliding_variable
+        row[k + 3] = controller.equivalent_force_N
+        row[k + 4] = raw
+        row[k + 5] = command.force_N
+        row[k + 6] = 1.0 if command.enable else 0.0
+        row[k + 7] = self.health.measured_force_N
+        row[k + 8] = self.reader.drive_state
+        row[k + 9] = command.acted
+        row[k + 10] = lateness
+        row[k + 11] = compute
+        row[k + 12] = 1.0 if overrun else 0.0
+        row[k + 13] = self.health.e2e_rejects
+        row[k + 14] = self.health.error_frames
+        row[k + 15] = self.health.send_failures
+
+    def _record_event(self, t: float, kind: str, name: str, detail: str) -> None:
+        self.last_event = f"{t:8.3f} s  {kind} {name}: {detail}"
+        self.recorder.record_event(t, kind, name, detail)
+
+    def _keep_event(self, t: float, kind: str, name: str, detail: str) -> None:
+        self.last_event = f"{t:8.3f} s  {kind} {name}: {detail}"
+
+    @property
+    def state(self) -> State:
+        """The supervisor's lifecycle state."""
+        return self.supervisor.state

@@ -1,0 +1,148 @@
+"""Peak, passive/controlled and comparison tables against the run data they come from."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harness.record import RunData, canonical_columns, load_run, load_runs, write_simulation_case
+from harness.report import comparison_table, pair_table, peak_table, reduction_percent, run_peaks, table_text
+
+WEIGHT_N = 4 * 9.80665 * 1000.0
+N_STORIES = 3
+
+
+def _signals(scale: float, force_amplitude: float, n: int = 1500) -> dict[str, np.ndarray]:
+    t = np.arange(n) * 0.004
+    data = {c: np.zeros(n) for c in canonical_columns(N_STORIES, timing=False)}
+    data["t_s"] = t
+    data["table_acceleration_m_s2"] = 3.0 * np.sin(2 * np.pi * 1.3 * t)
+    data["table_velocity_m_s"] = 0.2 * np.cos(2 * np.pi * 1.3 * t)
+    data["table_displacement_m"] = -0.025 * np.sin(2 * np.pi * 1.3 * t)
+    for j in range(1, N_STORIES + 1):
+        data[f"drift_{j}_m"] = scale * 0.002 * (N_STORIES + 1 - j) * np.sin(2 * np.pi * 2.3 * t + j)
+        data[f"floor_acceleration_{j}_m_s2"] = scale * (2.0 + j) * np.cos(2 * np.pi * 2.3 * t)
+    data["base_acceleration_m_s2"] = scale * 1.7 * np.sin(2 * np.pi * 0.9 * t)
+    data["sliding_displacement_m"] = scale * 0.04 * np.sin(2 * np.pi * 0.6 * t)
+    data["force_command_N"] = force_amplitude * np.sin(2 * np.pi * 0.6 * t)
+    return data
+
+
+@pytest.fixture
+def pair(tmp_path: Path) -> tuple[RunData, RunData, dict, dict]:
+    passive = _signals(1.0, 0.0)
+    controlled = _signals(0.4, 5000.0)
+    columns = canonical_columns(N_STORIES, timing=False)
+    meta = {"total_weight_N": WEIGHT_N, "record": {"name": "elcentro"}}
+    write_simulation_case(tmp_path / "sim", "passive", columns, passive, {**meta, "controller": "passive"})
+    write_simulation_case(tmp_path / "sim", "controlled", columns, controlled, {**meta, "controller": "eq23"})
+    runs = load_runs([tmp_path / "sim"])
+    return runs[0], runs[1], passive, controlled
+
+
+def _peak(values: np.ndarray) -> float:
+    return float(np.max(np.abs(values)))
+
+
+def test_run_peaks_match_the_recorded_signals(pair) -> None:
+    _, controlled_run, _, controlled = pair
+    peaks = run_peaks(controlled_run)
+    for j in range(1, N_STORIES + 1):
+        assert peaks[f"drift_{j}"] == pytest.approx(_peak(controlled[f"drift_{j}_m"]), rel=1e-9)
+        assert peaks[f"floor_acceleration_{j}"] == pytest.approx(_peak(controlled[f"floor_acceleration_{j}_m_s2"]), rel=1e-9)
+    assert peaks["sliding_displacement"] == pytest.approx(_peak(controlled["sliding_displacement_m"]), rel=1e-9)
+    assert peaks["base_acceleration"] == pytest.approx(_peak(controlled["base_acceleration_m_s2"]), rel=1e-9)
+    assert peaks["force_percent_weight"] == pytest.approx(100 * _peak(controlled["force_command_N"]) / WEIGHT_N, rel=1e-9)
+    assert peaks["table_pga"] == pytest.approx(_peak(controlled["table_acceleration_m_s2"]), rel=1e-9)
+
+
+def test_pair_table_shows_peaks_in_display_units_and_reduction_beside_the_controlled_value(pair) -> None:
+    passive_run, controlled_run, passive, controlled = pair
+    table = pair_table(passive_run, controlled_run)
+    assert table.columns[2] == "reduction (%)"
+    row = table.row("drift_1")
+    assert row.unit == "mm"
+    assert row.values[0] == pytest.approx(1e3 * _peak(passive["drift_1_m"]), rel=1e-9)
+    assert row.values[1] == pytest.approx(1e3 * _peak(controlled["drift_1_m"]), rel=1e-9)
+    expected = 100 * (_peak(passive["drift_1_m"]) - _peak(controlled["drift_1_m"])) / _peak(passive["drift_1_m"])
+    assert row.values[2] == pytest.approx(expected, rel=1e-9)
+    assert row.values[2] == pytest.approx(60.0, abs=0.5)  # the controlled signals are 0.4 x the passive ones
+    stroke = table.row("sliding_displacement")
+    assert stroke.values[1] == pytest.approx(1e3 * _peak(controlled["sliding_displacement_m"]), rel=1e-9)
+    force = table.row("force_percent_weight")
+    assert force.values[0] == 0.0 and force.values[2] is None
+    assert [r.key for r in table.rows][3:6] == ["drift_3", "drift_2", "drift_1"]
+
+
+def test_comparison_table_gives_both_peaks_and_their_difference(pair) -> None:
+    passive_run, controlled_run, passive, controlled = pair
+    table = comparison_table(controlled_run, passive_run)
+    row = table.row("floor_acceleration_3")
+    a = _peak(controlled["floor_acceleration_3_m_s2"])
+    b = _peak(passive["floor_acceleration_3_m_s2"])
+    assert row.values[0] == pytest.approx(a, rel=1e-9)
+    assert row.values[1] == pytest.approx(b, rel=1e-9)
+    assert row.values[2] == pytest.approx(b - a, rel=1e-9)
+    assert row.values[3] == pytest.approx(100 * (b - a) / a, rel=1e-9)
+
+
+def test_peak_table_has_a_column_per_run_and_hides_absent_quantities(pair) -> None:
+    passive_run, controlled_run, _, _ = pair
+    table = peak_table([passive_run, controlled_run])
+    assert table.columns == (passive_run.label, controlled_run.label)
+    keys = [r.key for r in table.rows]
+    assert "drift_3" in keys and "drift_4" not in keys
+
+
+def test_force_percent_is_absent_without_total_weight(tmp_path: Path) -> None:
+    columns = ("t_s", "force_command_N")
+    folder = write_simulation_case(tmp_path, "controlled", columns, {"t_s": np.arange(3.0), "force_command_N": np.array([1.0, -4.0, 2.0])}, {})
+    run = load_run(folder)
+    assert run_peaks(run)["force_percent_weight"] is None
+    text = table_text(peak_table([run]))
+    assert "Peak control force" not in text
+
+
+def test_table_text_lists_every_row_with_its_formatted_value(pair) -> None:
+    passive_run, controlled_run, passive, _ = pair
+    text = table_text(pair_table(passive_run, controlled_run))
+    assert "Story 1 drift" in text and "reduction (%)" in text
+    assert f"{1e3 * _peak(passive['drift_1_m']):.3f}" in text
+    assert "60.0" in text
+
+
+@pytest.mark.parametrize(("passive", "hybrid", "expected"), [(10.0, 4.0, 60.0), (10.0, 12.0, -20.0), (0.0, 1.0, None), (None, 1.0, None)])
+def test_reduction_percent_follows_the_spec_definition(passive, hybrid, expected) -> None:
+    assert reduction_percent(passive, hybrid) == (pytest.approx(expected) if expected is not None else None)
+
+
+def test_measured_force_row_reads_force_measured_and_nan_means_not_recorded(tmp_path: Path) -> None:
+    columns = ("t_s", "force_command_N", "force_measured_N")
+    t = np.arange(4.0)
+    measured = write_simulation_case(
+        tmp_path, "a", columns, {"t_s": t, "force_command_N": np.array([0, 100.0, -300, 0]), "force_measured_N": np.array([0, 90.0, -280, 5])},
+        {"total_weight_N": 1000.0},
+    )
+    unmeasured = write_simulation_case(
+        tmp_path, "b", columns, {"t_s": t, "force_command_N": np.ones(4), "force_measured_N": np.full(4, np.nan)}, {"total_weight_N": 1000.0}
+    )
+    assert run_peaks(load_run(measured))["force_percent_weight"] == pytest.approx(30.0)
+    assert run_peaks(load_run(measured))["measured_force_percent_weight"] == pytest.approx(28.0)
+    assert run_peaks(load_run(unmeasured))["measured_force_percent_weight"] is None
+
+
+def test_report_peaks_agree_with_the_simulators_peak_function(pair) -> None:
+    """harness.peaks serves `harness simulate`; the report must give the same numbers for the same data."""
+    from harness.peaks import flatten, peak_responses
+
+    _, controlled_run, _, _ = pair
+    theirs = flatten(peak_responses(controlled_run.signals, WEIGHT_N))
+    ours = run_peaks(controlled_run)
+    for j in range(1, N_STORIES + 1):
+        assert ours[f"drift_{j}"] == pytest.approx(theirs[f"drift_{j}_m"], rel=1e-12)
+        assert ours[f"floor_acceleration_{j}"] == pytest.approx(theirs[f"floor_acceleration_{j}_m_s2"], rel=1e-12)
+    assert ours["sliding_displacement"] == pytest.approx(theirs["sliding_displacement_m"], rel=1e-12)
+    assert ours["base_acceleration"] == pytest.approx(theirs["base_acceleration_m_s2"], rel=1e-12)
+    assert ours["force_percent_weight"] == pytest.approx(theirs["peak_force_pct_weight"], rel=1e-12)
