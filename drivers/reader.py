@@ -205,13 +205,18 @@ class FrameReader:
         """Deliberately clear the latched E-stop request (the operator's reset)."""
         self.estop_requested = False
 
-    def poll(self, now: float) -> int:
+    def poll(self, now: float, keep_fresh: bool = False, block_s: float = 0.0) -> int:
         """Handle every frame waiting on the bus (at most ``max_frames``).
 
         Parameters
         ----------
         now : float
             The loop's current time (s); receive time of the frames unless ``use_msg_timestamp``.
+        keep_fresh : bool
+            Keep the ``fresh`` flags of an earlier poll of the same tick (several polls per tick,
+            as in lockstep); by default every poll starts a new tick.
+        block_s : float
+            Wait up to this long for the first frame (s); 0 never blocks (the real-time tick).
 
         Returns
         -------
@@ -225,15 +230,18 @@ class FrameReader:
         """
         handled = 0
         recv = self.bus.recv
-        for sample in self._sample_list:
-            sample.fresh = False
+        if not keep_fresh:
+            for sample in self._sample_list:
+                sample.fresh = False
+        timeout = block_s
         while handled < self.max_frames:
             try:
-                msg = recv(timeout=0)
+                msg = recv(timeout=timeout)
             except (can.CanError, OSError, ValueError) as err:  # ValueError: select() on a closed socket
                 raise BusError(f"receiving from the CAN bus failed: {err}") from err
             if msg is None:
                 break
+            timeout = 0.0
             handled += 1
             if self.tap is not None:
                 self.tap(msg)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
 from collections.abc import Callable, Sequence
 
 from rich.console import Console
@@ -25,6 +26,11 @@ profile's record.records_dir; a PATH (.AT2, .csv, .txt) is read directly.
 """
 
 
+def _wrap(text: str) -> str:
+    """Wrap a description to the terminal's usual width (the formatter keeps it as given)."""
+    return textwrap.fill(text, width=78)
+
+
 def _add_record_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("record (overrides the profile's record section)")
     group.add_argument("--record", metavar="NAME|PATH", help="record name or file (default: the profile's)")
@@ -38,7 +44,7 @@ def _add_simulate(sub) -> None:
     parser = sub.add_parser(
         "simulate",
         help="offline simulation, passive and controlled side by side",
-        description=(
+        description=_wrap(
             "Simulate the profile's building on its bearings under the record, once passive "
             "(bearings only) and once with the controller, faster than real time, and print the "
             "peak responses with the %% reduction. The controller samples at --rate and holds its "
@@ -71,7 +77,7 @@ def _add_report(sub) -> None:
     parser = sub.add_parser(
         "report",
         help="tables and plots from run folders",
-        description=(
+        description=_wrap(
             "Build the peak-response tables (with %% reduction for passive/controlled pairs and a "
             "comparison for two runs of the same record), plots (drift histories, table motion, "
             "bearing hysteresis, stroke against its limits, forces, sliding variable, loop timing) "
@@ -91,7 +97,7 @@ def _add_records(sub) -> None:
     parser = sub.add_parser(
         "records",
         help="list ground-motion records, or show one after processing",
-        description=(
+        description=_wrap(
             "With no NAME, list the named records and whether their files are in the records "
             "directory. With a NAME or PATH, process it as a run would (time scale, duration, PGA, "
             "baseline correction) and show PGA, PGV, PGD, duration, Arias intensity, significant "
@@ -111,11 +117,112 @@ def _add_records(sub) -> None:
     parser.set_defaults(handler=_cmd_records)
 
 
+def _add_bus_options(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("CAN bus (overrides the profile's can section)")
+    group.add_argument("--interface", metavar="I", help="python-can interface: virtual, socketcan, pcan, kvaser, ...")
+    group.add_argument("--channel", metavar="C", help="channel, e.g. vcan0, can0, PCAN_USBBUS1")
+
+
+def _add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> None:
+    parser.add_argument("profile", nargs="?", help=default_help)
+    parser.add_argument("--variant", help="apply a named variant of the profile")
+    parser.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+        help="override a profile value, e.g. --set safety.stroke.hard_limit_m=0.05 (repeatable)",
+    )
+
+
+def _add_dry_run(sub) -> None:
+    parser = sub.add_parser(
+        "dry-run",
+        help="the whole test against the virtual rig over CAN (the main job)",
+        description=_wrap(
+            "Run the real control loop against the virtual rig, which emulates the 4-DOF rig (base mat "
+            "on friction bearings, three stories, shaking table, sensor noise, quantization, delay, "
+            "actuator dynamics) and speaks the same CAN protocol. It arms when every pre-arm check passes, "
+            "starts the table, runs the record, ramps the force down, writes a run folder and prints the "
+            "peaks beside the simulated passive reference. With no arguments: profiles/nceer_4dof.yaml, "
+            "the synthetic record, python-can's in-process virtual bus. Ctrl-C stops safely (ramp down, "
+            "drive off); a second Ctrl-C trips."
+        ),
+        epilog=(
+            "examples:\n  harness dry-run\n  harness dry-run profiles/nceer_4dof.yaml --record el_centro --pga 0.34 "
+            "--time-scale 2 --records-dir ../shared/data/ground_motions\n"
+            "  harness dry-run --interface socketcan --channel vcan0          (starts `harness rig` itself)\n"
+            "  harness dry-run --set safety.stroke.hard_limit_m=0.02           (watch it trip)\n\n" + EPILOG
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_profile_options(parser, "profile YAML (default: profiles/nceer_4dof.yaml)")
+    _add_record_options(parser)
+    _add_bus_options(parser)
+    loop = parser.add_argument_group("loop")
+    loop.add_argument("--rate", type=float, metavar="HZ", help="loop rate (default: the profile's loop.rate_hz)")
+    loop.add_argument("--controller", metavar="NAME", help="a design of the profile (default: control.controller)")
+    loop.add_argument("--lockstep", action="store_true", help="the rig advances one step per command (deterministic; slow machines)")
+    loop.add_argument("--external-rig", action="store_true", help="a `harness rig` already serves the channel; do not start one")
+    output = parser.add_argument_group("output")
+    output.add_argument("--log-dir", metavar="DIR", help="where run folders go (default: logs/)")
+    output.add_argument("--quiet", action="store_true", help="no live console")
+    parser.set_defaults(handler=_cmd_dry_run)
+
+
+def _add_run(sub) -> None:
+    parser = sub.add_parser(
+        "run",
+        help="the real rig: the same loop, no virtual rig",
+        description=_wrap(
+            "Run the control loop against the real rig on a CAN channel: the same code as a dry run "
+            "without the virtual rig. The lab's table controller plays the record; this command runs for "
+            "the record's duration (from the profile or --duration). It asks before it arms the actuator "
+            "(--yes skips the question). Ctrl-C stops safely (ramp down, drive off); a second Ctrl-C trips."
+        ),
+        epilog="example:\n  harness run profiles/my_rig.yaml --interface socketcan --channel can0\n\n" + EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_profile_options(parser, "profile YAML of the rig")
+    _add_record_options(parser)
+    _add_bus_options(parser)
+    parser.add_argument("--rate", type=float, metavar="HZ", help="loop rate (default: the profile's loop.rate_hz)")
+    parser.add_argument("--controller", metavar="NAME", help="a design of the profile")
+    parser.add_argument("--yes", action="store_true", help="do not ask before arming")
+    parser.add_argument("--log-dir", metavar="DIR", help="where run folders go (default: logs/)")
+    parser.add_argument("--quiet", action="store_true", help="no live console")
+    parser.set_defaults(handler=_cmd_run)
+
+
+def _study_options(args: argparse.Namespace, **extra) -> "StudyOptions":
+    from harness.study import StudyOptions
+
+    return StudyOptions(
+        record=args.record, records_dir=args.records_dir, pga_g=args.pga, time_scale=args.time_scale,
+        duration_s=args.duration, **extra,
+    )
+
+
+def _print_timing(console: Console, timing: dict, rate_hz: float) -> None:
+    if not timing.get("ticks"):
+        return
+    console.print(
+        f"loop at {rate_hz:g} Hz: {timing['ticks']} ticks, lateness median {timing['lateness_median_s'] * 1e6:.1f} us, "
+        f"p99 {timing['lateness_p99_s'] * 1e6:.1f} us, max {timing['lateness_max_s'] * 1e6:.0f} us; compute median "
+        f"{timing['compute_median_s'] * 1e6:.1f} us, p99 {timing['compute_p99_s'] * 1e6:.1f} us; overruns {timing['overruns']}"
+    )
+
+
+def _print_outcome(console: Console, session) -> None:
+    style = {"completed": "green", "tripped": "bold red", "stopped": "yellow"}.get(session.outcome, "red")
+    reason = f" ({escape(session.trip_reason)})" if session.trip_reason else ""
+    console.print(f"outcome: [{style}]{session.outcome}[/]{reason}; run folder {session.run_path}")
+    for line in session.loop.realtime_report:
+        console.print(f"  {line}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (also used to render --help in the docs)."""
     parser = argparse.ArgumentParser(
         prog="harness",
-        description=(
+        description=_wrap(
             "Hardware-in-the-loop harness for sliding-mode control of sliding-isolated buildings "
             "on a shaking table (Yang, Wu, Reinhorn & Riley 1996)."
         ),
@@ -123,6 +230,8 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    _add_dry_run(sub)
+    _add_run(sub)
     _add_simulate(sub)
     _add_report(sub)
     _add_records(sub)
@@ -184,6 +293,68 @@ def _cmd_simulate(args: argparse.Namespace, console: Console) -> int:
         folder = write_study_folders(result, args.out)
         console.print(f"wrote time series to {folder}")
     return exit_codes.OK
+
+
+def _cmd_dry_run(args: argparse.Namespace, console: Console) -> int:
+    from harness.dryrun import DryRunOptions, dry_run
+    from harness.peak_table import peak_table
+    from harness.peaks import flatten
+    from harness.profile import load_profile
+
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
+    options = DryRunOptions(
+        study=_study_options(args, controller=args.controller), rate_hz=args.rate, interface=args.interface,
+        channel=args.channel, log_dir=args.log_dir, lockstep=args.lockstep, external_rig=args.external_rig,
+        show_console=not args.quiet,
+    )
+    result = dry_run(profile, options, console)
+    session, motion = result.session, result.motion
+    console.print(
+        f"[bold]{profile.name}[/] dry run, record [bold]{motion.name}[/]: PGA {motion.pga_g:.3f} g, "
+        f"PGD {motion.pgd_m * 1e3:.1f} mm, time scale {motion.time_scale:g}, {motion.duration_s:.1f} s"
+    )
+    console.print(peak_table(result.passive.peaks, result.peaks, "peak responses: simulated passive reference and the dry run",
+                             labels=("passive (sim.)", "dry run")))
+    ours, twin = flatten(result.peaks), flatten(result.twin.peaks)
+    worst = max(twin, key=lambda k: abs(ours[k] - twin[k]) / abs(twin[k]) if twin[k] else 0.0)
+    difference = abs(ours[worst] - twin[worst]) / abs(twin[worst]) * 100 if twin[worst] else 0.0
+    console.print(f"against `harness simulate` with the rig's delays: largest peak difference {difference:.1f} % ({worst})")
+    _print_timing(console, session.loop.timing, options.rate_hz or profile.loop.rate_hz)
+    _print_outcome(console, session)
+    return session.exit_code
+
+
+def _cmd_run(args: argparse.Namespace, console: Console) -> int:
+    import dataclasses
+    from pathlib import Path
+
+    from harness.dryrun import LOG_DIR, can_settings
+    from harness.profile import load_profile
+    from harness.session import SessionSettings, run_session
+    from harness.study import prepare_motion
+
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
+    motion = prepare_motion(profile, _study_options(args))
+    rate = args.rate or profile.loop.rate_hz
+    can = can_settings(profile, args.interface, args.channel, rate)
+    controller = args.controller or profile.control.controller
+    if not args.yes:
+        answer = console.input(
+            f"Arm the actuator on {can.interface}:{can.channel} with {controller} for {motion.duration_s:.1f} s "
+            f"(max force {profile.safety.force.max_force_N / 1e3:g} kN, hard stroke {profile.safety.stroke.hard_limit_m * 1e3:g} mm)? [y/N] "
+        )
+        if answer.strip().lower() not in ("y", "yes"):
+            console.print("not armed")
+            return exit_codes.INPUT_ERROR
+    settings = SessionSettings(
+        kind="run", can=can, rate_hz=rate, duration_s=motion.duration_s, controller=controller,
+        log_dir=Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
+        metadata={"record": {"name": motion.name, "pga_g": motion.pga_g, "duration_s": motion.duration_s}},
+    )
+    session = run_session(profile, settings, console=console)
+    _print_timing(console, session.loop.timing, rate)
+    _print_outcome(console, session)
+    return session.exit_code
 
 
 def _cmd_report(args: argparse.Namespace, console: Console) -> int:

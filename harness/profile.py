@@ -34,7 +34,8 @@ from harness.loop.config import LoopConfig
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
 from harness.records import RecordConfig, TableLimits
-from harness.safety.config import SafetyConfig
+from harness.rig.config import RigConfig
+from harness.safety.config import SafetyConfig, check_config
 from harness.schema import build, internal, quantity, to_data
 
 PROFILE_DIR = Path(__file__).resolve().parent.parent / "profiles"
@@ -57,9 +58,20 @@ class Profile:
     can: CanConfig = dataclasses.field(default_factory=CanConfig)
     safety: SafetyConfig = dataclasses.field(default_factory=SafetyConfig)
     loop: LoopConfig = dataclasses.field(default_factory=LoopConfig)
+    rig: RigConfig = dataclasses.field(default_factory=RigConfig)
     variants: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     source_path: str = internal("", "the file this profile was loaded from")
     variant: str = internal("", "the variant applied, if any")
+
+    def __post_init__(self) -> None:
+        problems = check_config(self.safety)
+        if problems:
+            raise ValueError("inconsistent safety limits: " + "; ".join(problems))
+        if self.loop.rate_hz != self.can.command_rate_hz:
+            raise ValueError(
+                f"loop.rate_hz is {self.loop.rate_hz:g} Hz but can.command_rate_hz is {self.can.command_rate_hz:g} Hz; "
+                "the actuator command is sent once per tick, so they must be equal"
+            )
 
     @property
     def base_dir(self) -> Path:
@@ -140,7 +152,36 @@ def _apply_variant(data: dict, variant: str, source: str) -> dict:
     return merge(data, overlay)
 
 
-def load_profile(path: str | Path | None = None, variant: str | None = None) -> Profile:
+def parse_overrides(items: list[str] | tuple[str, ...]) -> dict:
+    """``["safety.stroke.hard_limit_m=0.02", ...]`` -> a nested mapping (values parsed as YAML scalars).
+
+    Raises
+    ------
+    ProfileError
+        For an item without ``=`` or with an empty key.
+    """
+    result: dict = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip() or any(not part for part in key.strip().split(".")):
+            raise ProfileError(f"override {item!r}: expected KEY.PATH=VALUE, e.g. safety.stroke.hard_limit_m=0.02", "--set")
+        try:
+            value = yaml.safe_load(text) if text.strip() else ""
+        except yaml.YAMLError as err:
+            raise ProfileError(f"override {item!r}: the value is not valid YAML ({err})", "--set") from err
+        node = result
+        parts = key.strip().split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise ProfileError(f"override {item!r} conflicts with another override of {part}", "--set")
+        node[parts[-1]] = value
+    return result
+
+
+def load_profile(
+    path: str | Path | None = None, variant: str | None = None, overrides: list[str] | tuple[str, ...] = ()
+) -> Profile:
     """Load, merge and validate a profile.
 
     Parameters
@@ -149,6 +190,8 @@ def load_profile(path: str | Path | None = None, variant: str | None = None) -> 
         The YAML file; default ``profiles/nceer_4dof.yaml``.
     variant : str, optional
         Name of an entry of ``variants`` to apply.
+    overrides : sequence of str
+        ``KEY.PATH=VALUE`` items applied last (the command line's ``--set``); validated like the file.
 
     Raises
     ------
@@ -157,6 +200,9 @@ def load_profile(path: str | Path | None = None, variant: str | None = None) -> 
     file = Path(path) if path is not None else DEFAULT_PROFILE
     source = str(file)
     data = _resolve_extends(file)
+    if overrides:
+        data = merge(data, parse_overrides(overrides))
+        source = f"{source} (with --set {' '.join(overrides)})"
     profile = build(Profile, data, source=source)
     for name in profile.variants:  # every variant must give a valid profile
         if name != variant:

@@ -77,7 +77,8 @@ class ControlLoop:
     duration_s : float
         Seconds of record to run (plus settle and tail).
     lockstep : callable, optional
-        ``lockstep(k, timeout_s) -> bool``: wait until the rig has taken step ``k``; None for real time.
+        ``lockstep(k, timeout_s) -> bool``: poll the bus until the rig has taken step ``k`` (the
+        tick then does not poll again); None for real time.
     on_start : callable, optional
         ``on_start(t)``: called once when RUNNING begins (e.g. start the virtual table).
     status : LoopStatus, optional
@@ -157,7 +158,7 @@ class ControlLoop:
                 health.operator_stop = self.signals.stop_requested
                 health.operator_trip = self.signals.trip_requested
                 started = time.perf_counter()
-                command = tick.run(t, self.period_s, t, lateness, self.scheduler.consecutive_overruns)
+                command = tick.run(t, self.period_s, t, lateness, self.scheduler.consecutive_overruns, self.lockstep is None)
                 timing.add(lateness, time.perf_counter() - started)
                 run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
                 self._update_status(t, run_started, duration_s, command)

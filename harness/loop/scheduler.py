@@ -3,8 +3,9 @@
 ``next += period; sleep_until(next)``: lateness does not accumulate. The wait sleeps
 until ``spin_s`` before the deadline and spins the rest, which on these machines turns
 a median wake-up lateness of ~50 us (plain sleep) into well under 1 us (DESIGN.md).
-A tick that starts after the following deadline has passed is an overrun; the
-scheduler then skips to the next deadline in the future instead of bursting.
+When a tick runs so long that whole deadlines pass, those deadlines are skipped
+(counted as overruns) and the loop runs at once on the latest one that passed, late,
+instead of bursting through the missed ticks one after another.
 
 The clock and the sleep function are injectable so tests run on simulated time.
 """
@@ -80,8 +81,8 @@ class FixedRateScheduler:
     def wait(self) -> float:
         """Block until the next tick's deadline; return its scheduled time since start (s).
 
-        Counts an overrun when the deadline had already passed by more than a
-        period (the tick before ran long), and skips the missed deadlines.
+        Counts an overrun for every deadline that passed entirely while the tick
+        before ran long, skips those, and returns at once on the latest one.
         """
         self.tick += 1
         if self.tick > 0:

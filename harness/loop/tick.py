@@ -66,13 +66,14 @@ class ControlTick:
         self._sink = self._record_event if recorder is not None else self._keep_event
 
     # ------------------------------------------------------------------ read
-    def read(self, now: float, consecutive_overruns: int) -> None:
-        """Poll the bus and update the measurement and health records in place."""
+    def read(self, now: float, consecutive_overruns: int, poll: bool = True) -> None:
+        """Poll the bus (unless the caller already did this tick) and update the records in place."""
         health = self.health
-        try:
-            self.reader.poll(now)
-        except HarnessError:
-            health.bus_gone = True
+        if poll:
+            try:
+                self.reader.poll(now)
+            except HarnessError:
+                health.bus_gone = True
         self.reader.fill(self.meas)
         table, base, status = self._table, self._base, self._status
         health.table_fresh = table.fresh
@@ -97,10 +98,15 @@ class ControlTick:
         health.consecutive_overruns = consecutive_overruns
 
     # ------------------------------------------------------------------ the tick
-    def run(self, t: float, dt: float, now: float, lateness_s: float = 0.0, consecutive_overruns: int = 0) -> SupervisedCommand:
-        """Run one tick at loop time ``t`` (s) with step ``dt`` (s); ``now`` is the drivers' clock (s)."""
+    def run(
+        self, t: float, dt: float, now: float, lateness_s: float = 0.0, consecutive_overruns: int = 0, poll: bool = True
+    ) -> SupervisedCommand:
+        """Run one tick at loop time ``t`` (s) with step ``dt`` (s); ``now`` is the drivers' clock (s).
+
+        ``poll=False`` when the caller has already polled the bus this tick (lockstep).
+        """
         started = time.perf_counter()
-        self.read(now, consecutive_overruns)
+        self.read(now, consecutive_overruns, poll)
         supervisor = self.supervisor
         friction = raw = math.nan
         try:
@@ -109,7 +115,7 @@ class ControlTick:
             command = supervisor.update(t, dt, self.health, raw)
         except Exception as exc:  # noqa: BLE001 - any failure in the tick trips; it never kills the process
             command = supervisor.report_exception(t, exc)
-        self.write(command, now)
+        self.write(t, command, now)
         self.ticks += 1
         supervisor.events.drain(self._sink)
         self._fill_row(t, command, friction, raw, lateness_s, time.perf_counter() - started, consecutive_overruns > 0)
@@ -117,14 +123,14 @@ class ControlTick:
             self.recorder.record_row(self.row)
         return command
 
-    def write(self, command: SupervisedCommand, now: float) -> None:
+    def write(self, t: float, command: SupervisedCommand, now: float) -> None:
         """Send the supervised command (the only path to the actuator) and the heartbeat."""
         try:
             self.writer.command(command.force_N, command.enable, now)
             if self.ticks % self.heartbeat_every == 0:
                 self.writer.heartbeat(int(command.state), now)
         except HarnessError as exc:  # a value the DBC cannot carry: never send it, trip instead
-            self.supervisor.report_exception(now, exc)
+            self.supervisor.report_exception(t, exc)
             self.writer.command(0.0, False, now)
 
     def send_disable(self, now: float) -> None:

@@ -70,19 +70,19 @@ class BearingConfig:
         )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def friction_coefficient(sliding_velocity: float, params: np.ndarray) -> float:
     """mu of Eq. 4 for a sliding velocity (m/s)."""
     return params[MU_MAX] - params[MU_DELTA] * math.exp(-params[A_MU] * abs(sliding_velocity))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def friction_force(sliding_velocity: float, nu: float, params: np.ndarray) -> float:
     """f of Eq. 3 (N)."""
     return friction_coefficient(sliding_velocity, params) * params[WEIGHT] * nu
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _power(magnitude: float, exponent: float) -> float:
     """``magnitude ** exponent`` by multiplication for the usual whole exponents (eta - 1 = 1, 2)."""
     if exponent == 1.0:
@@ -94,7 +94,7 @@ def _power(magnitude: float, exponent: float) -> float:
     return magnitude**exponent
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def hysteretic_rate(sliding_velocity: float, nu: float, params: np.ndarray) -> float:
     """nudot of Eq. 5 (1/s)."""
     magnitude = abs(nu)
@@ -106,13 +106,13 @@ def hysteretic_rate(sliding_velocity: float, nu: float, params: np.ndarray) -> f
     ) / params[YIELD]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _travel_slope(nu: float, direction: float, params: np.ndarray) -> float:
     """d nu / d x_b for travel in ``direction`` (+1 or -1), from Eq. 5 divided by xdot_b."""
     return hysteretic_rate(direction, nu, params)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def advance_hysteretic(nu: float, sliding_velocity: float, dt: float, params: np.ndarray) -> float:
     """Advance nu over ``dt`` with the sliding velocity held constant (exact to RK4 accuracy).
 
@@ -154,7 +154,7 @@ def advance_hysteretic(nu: float, sliding_velocity: float, dt: float, params: np
     return nu
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def estimator_step(nu: float, mean_velocity: float, velocity: float, dt: float, params: np.ndarray):
     """One online-estimator step: nu advanced with the mean velocity, then mu and f at ``velocity``.
 

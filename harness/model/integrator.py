@@ -42,7 +42,7 @@ _E1, _E3, _E4, _E5, _E6, _E7 = (
 )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def table_state(t: float, accel: np.ndarray, velocity: np.ndarray, displacement: np.ndarray, dt: float):
     """Table displacement and velocity at time ``t`` (piecewise-linear acceleration between samples).
 
@@ -63,7 +63,7 @@ def table_state(t: float, accel: np.ndarray, velocity: np.ndarray, displacement:
     return x, v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def derivative(
     t: float,
     y: np.ndarray,
@@ -92,7 +92,7 @@ def derivative(
     out[size] = hysteretic_rate(sliding_velocity, nu, bearing)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def advance(
     y: np.ndarray,
     t0: float,

@@ -1,0 +1,238 @@
+"""``harness dry-run``: the whole test against the virtual rig, over CAN, with the real loop.
+
+On python-can's in-process ``virtual`` bus the rig runs in a thread of this process; on a
+real channel (``socketcan``/``vcan0``) it runs as a separate ``harness rig`` process, which
+this command starts unless ``--external-rig`` says one is already running. Afterwards the
+dry run's peaks are printed beside the simulated passive reference, and compared with
+``harness simulate`` run with the same sensor and actuator delays.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from harness.errors import BusError
+from harness.model.plant import Plant, TableMotion
+from harness.profile import Profile
+from harness.session import SessionResult, SessionSettings, run_peaks, run_session
+from harness.simulation import CaseResult, SamplingSettings, run_case
+from harness.study import StudyOptions, make_controller, prepare_motion
+from harness.control.estimator import FrictionEstimator
+
+RIG_START = 1  # RIG_CONTROL command: start table
+RIG_APPEAR_TIMEOUT_S = 60.0
+LOG_DIR = Path(__file__).resolve().parent.parent / "logs"
+
+
+@dataclass(frozen=True)
+class DryRunOptions:
+    """The command line's choices for a dry run."""
+
+    study: StudyOptions = StudyOptions()
+    rate_hz: float | None = None
+    interface: str | None = None
+    channel: str | None = None
+    log_dir: str | None = None
+    lockstep: bool = False
+    external_rig: bool = False
+    show_console: bool = True
+
+
+@dataclass
+class DryRunResult:
+    """The session and the simulated twins it is compared with."""
+
+    session: SessionResult
+    peaks: dict
+    passive: CaseResult
+    twin: CaseResult
+    motion: object
+
+
+def can_settings(profile: Profile, interface: str | None, channel: str | None, rate_hz: float):
+    """The profile's CAN settings with the command line's interface, channel and rate."""
+    can = profile.can
+    return dataclasses.replace(
+        can,
+        interface=interface or can.interface,
+        channel=channel or can.channel,
+        command_rate_hz=rate_hz,
+        sensor_rate_hz=rate_hz,
+    )
+
+
+def _rig_process(profile: Profile, options: DryRunOptions, can, rate_hz: float) -> subprocess.Popen:
+    study = options.study
+    args = [sys.executable, "-m", "harness.cli", "rig", profile.source_path, "--interface", can.interface,
+            "--channel", can.channel, "--rate", str(rate_hz)]
+    for flag, value in (("--record", study.record), ("--records-dir", study.records_dir), ("--pga", study.pga_g),
+                        ("--time-scale", study.time_scale), ("--duration", study.duration_s)):
+        if value is not None:
+            args += [flag, str(value)]
+    if options.lockstep:
+        args.append("--lockstep")
+    return subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+
+class RigCoordinator:
+    """The harness side's dealings with the virtual rig: wait for it, lockstep, start the table.
+
+    Parameters
+    ----------
+    lockstep : bool
+    period_s : float
+        The loop's tick period (s): tick k happens at loop time k * period_s.
+    process : subprocess.Popen, optional
+        The rig process this command started (to report why it died).
+    appear_timeout_s : float
+    """
+
+    def __init__(
+        self, lockstep: bool, period_s: float, process: subprocess.Popen | None = None,
+        appear_timeout_s: float = RIG_APPEAR_TIMEOUT_S,
+    ):
+        self.lockstep = lockstep
+        self.period_s = period_s
+        self.process = process
+        self.appear_timeout_s = appear_timeout_s
+        self.link = None
+        self.base_step = 0
+
+    def _poll_until(self, done, timeout_s: float, what: str) -> None:
+        deadline = time.monotonic() + timeout_s
+        while not done():
+            process = self.process
+            if process is not None and process.poll() is not None:
+                detail = process.stderr.read().decode(errors="replace").strip()[-2000:] if process.stderr else ""
+                raise BusError(f"the virtual rig process exited with status {process.returncode}: {detail}")
+            if time.monotonic() > deadline:
+                raise BusError(
+                    f"{what} within {timeout_s:g} s on {self.link.bus.channel_info}; start a rig with "
+                    "`harness rig PROFILE --interface ... --channel ...` (or drop --external-rig)"
+                )
+            self.link.reader.poll(0.0, block_s=0.05)
+
+    def on_link(self, link) -> None:
+        """Wait for the rig's status frames; switch it to lockstep and note its step count."""
+        self.link = link
+        status = link.reader.sample("RIG_STATUS")
+        self._poll_until(lambda: status.count > 0, self.appear_timeout_s, "no RIG_STATUS frame from a virtual rig")
+        if self.lockstep:
+            seen = status.count
+            link.writer.rig_control(0, True, 0.0)
+            self._poll_until(lambda: status.count > seen, 5.0, "the rig did not answer the switch to lockstep")
+            self.base_step = int(status.values[status.index("step_index")])
+
+    def on_start(self, t: float) -> None:
+        """RUNNING begins: start the table."""
+        self.link.writer.rig_control(RIG_START, self.lockstep, t)
+
+    def lockstep_wait(self, tick):
+        """The loop's lockstep wait: poll until the rig reports step ``base + k``."""
+        reader = tick.reader
+        status = reader.sample("RIG_STATUS")
+        step_index = status.index("step_index")
+        period = self.period_s
+
+        def wait(k: int, timeout_s: float) -> bool:
+            now = k * period
+            reader.poll(now)
+            deadline = time.monotonic() + timeout_s
+            while status.values[step_index] < self.base_step + k:
+                if time.monotonic() > deadline:
+                    return False
+                reader.poll(now, keep_fresh=True, block_s=0.005)
+            return True
+
+        return wait
+
+
+def simulated_twins(profile: Profile, motion, rate_hz: float, controller: str, delay_s: float) -> tuple[CaseResult, CaseResult]:
+    """The passive reference and the controlled twin of a dry run, simulated offline."""
+    table = TableMotion.from_motion(motion)
+    plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
+    duration = motion.duration_s
+    settings = SamplingSettings(rate_hz, delay_s, "estimator")
+    passive = run_case("passive", plant, duration, settings)
+    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    twin = run_case("simulate", plant, duration, settings, make_controller(profile, controller), estimator)
+    return passive, twin
+
+
+def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunResult:
+    """Run a dry run; see the module docstring."""
+    from drivers.link import open_rig
+    from harness.rig import VirtualRig
+
+    motion = prepare_motion(profile, options.study)
+    rate_hz = options.rate_hz or profile.loop.rate_hz
+    can = can_settings(profile, options.interface, options.channel, rate_hz)
+    controller = options.study.controller or profile.control.controller
+    settings = SessionSettings(
+        kind="dry-run", can=can, rate_hz=rate_hz, duration_s=motion.duration_s, controller=controller,
+        log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
+        show_console=options.show_console,
+        metadata={"record": {"name": motion.name, "pga_g": motion.pga_g, "pgv_m_s": motion.pgv_m_s,
+                             "pgd_m": motion.pgd_m, "time_scale": motion.time_scale, "duration_s": motion.duration_s}},
+    )
+    rig = rig_link = process = None
+    if can.interface == "virtual":
+        rig_link = open_rig(can)
+        rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=options.lockstep, can_config=can)
+        rig.start_thread()
+    elif not options.external_rig:
+        process = _rig_process(profile, options, can, rate_hz)
+    coordinator = RigCoordinator(options.lockstep, 1.0 / rate_hz, process)
+    try:
+        session = run_session(
+            profile, settings, on_start=coordinator.on_start,
+            make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
+            on_link=coordinator.on_link, console=console,
+        )
+    finally:
+        if rig is not None:
+            rig.stop()
+            rig_link.close()
+        if process is not None:
+            _stop_process(process)
+    peaks = run_peaks(session.run_path, profile.structure.total_weight_N)
+    delay = rig_delay_s(profile) if rig is not None or process is not None else 0.0
+    passive, twin = simulated_twins(profile, motion, rate_hz, controller, delay)
+    return DryRunResult(session, peaks, passive, twin, motion)
+
+
+def rig_delay_s(profile: Profile) -> float:
+    """The virtual rig's delay from sample to force (s), for the simulated twin.
+
+    Sensor transport delay (the larger of displacement and velocity) plus the actuator's
+    transport delay plus the low-frequency delay of its dynamics (tau for a first-order
+    lag, 2 zeta / omega_n for a second-order one).
+    """
+    rig = profile.rig
+    sensors = max(rig.sensors.displacement.delay_s, rig.sensors.velocity.delay_s)
+    actuator = rig.actuator
+    if actuator.model == "first_order":
+        lag = actuator.time_constant_s
+    elif actuator.model == "second_order":
+        lag = 2.0 * actuator.damping_ratio / (2.0 * math.pi * actuator.bandwidth_hz)
+    else:
+        lag = 0.0
+    return float(sensors + actuator.delay_s + lag)
+
+
+def _stop_process(process: subprocess.Popen) -> None:
+    import signal
+
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()

@@ -1,0 +1,137 @@
+"""Detectors on the actuator's servo controller: drive fault, pressure, status age, force tracking."""
+
+from __future__ import annotations
+
+from harness.safety.comms_detectors import FlagDetector
+from harness.safety.config import ActuatorConfig, ForceConfig
+from harness.safety.detector_base import Detector, LowPass, Persistence
+from harness.safety.events import ACTION_BY_NAME, Action
+from harness.safety.health import TickHealth
+
+
+class DriveFault(FlagDetector):
+    """The actuator's servo controller reports a fault.
+
+    Detects: ``health.drive_fault``. Bound: the same tick. Action: TRIP.
+    Reset: explicit reset, refused while the fault is reported.
+    """
+
+    NAME = "drive_fault"
+    ACTION = Action.TRIP
+    WHAT = "actuator drive reports a fault"
+    DETECTS = "drive fault bit in the actuator status frame"
+    RESET = "explicit reset, refused while the drive reports the fault"
+
+    __slots__ = ()
+
+    def bad(self, health: TickHealth) -> bool:
+        """True while the drive reports a fault."""
+        return health.drive_fault
+
+
+class HydraulicPressure(FlagDetector):
+    """Hydraulic pressure lost.
+
+    Detects: ``health.pressure_ok`` False. Bound: the same tick. Action: TRIP.
+    Reset: explicit reset, refused while the pressure is not ok.
+    """
+
+    NAME = "hydraulic_pressure"
+    ACTION = Action.TRIP
+    WHAT = "hydraulic pressure is not ok"
+    DETECTS = "pressure-ok bit cleared in the actuator status frame"
+    RESET = "explicit reset, refused while pressure is not ok"
+
+    __slots__ = ()
+
+    def bad(self, health: TickHealth) -> bool:
+        """True while the pressure is not ok."""
+        return not health.pressure_ok
+
+
+class ActuatorStatusStale(Detector):
+    """Actuator status frames stopped arriving.
+
+    Detects: ``actuator_status_age_s > max_status_age_s`` (or not finite).
+    Bound: the first tick the age exceeds the limit. Action: TRIP.
+    Reset: explicit reset, refused while still stale.
+    """
+
+    NAME = "actuator_status_stale"
+    ACTION = Action.TRIP
+    DETECTS = "actuator status frame older than max_status_age_s"
+    BOUND = "first tick with age > max_status_age_s"
+    RESET = "explicit reset, refused while still stale"
+
+    __slots__ = ("max_age_s",)
+
+    def __init__(self, config: ActuatorConfig) -> None:
+        super().__init__()
+        self.max_age_s = config.max_status_age_s
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True while the status is too old."""
+        return not health.actuator_status_age_s <= self.max_age_s
+
+    def detail(self, health: TickHealth) -> str:
+        """Age and limit."""
+        return f"actuator status age {health.actuator_status_age_s * 1e3:.3g} ms, expected <= {self.max_age_s * 1e3:.3g} ms"
+
+    def present(self, health: TickHealth) -> str:
+        """Still stale?"""
+        return self.detail(health) if self.update(0.0, 0.0, health) else ""
+
+
+class ForceTracking(Detector):
+    """The actuator does not follow the commanded force.
+
+    Detects: ``|measured_force_N - expected| > tracking_tolerance_N`` for at least
+    ``tracking_time_s``, where ``expected`` is the force commanded on the previous
+    tick passed through a first-order lag with ``actuator_time_constant_s`` (none
+    when 0). The supervisor writes that command to :attr:`command_N` before each
+    update. Bound: ``tracking_time_s`` after the error first exceeds the
+    tolerance. Action: ``tracking_action`` (default TRIP). Reset: explicit reset
+    (filter and timer cleared; not knowable from one sample).
+    """
+
+    NAME = "force_tracking"
+    ACTION = Action.TRIP
+    DETECTS = "|measured - lagged commanded force| above tracking_tolerance_N for tracking_time_s"
+    BOUND = "tracking_time_s after the error exceeds the tolerance"
+    RESET = "explicit reset; filter and timer cleared"
+
+    __slots__ = ("tolerance_N", "command_N", "_lag", "_timer", "_error_N")
+
+    def __init__(self, config: ForceConfig) -> None:
+        super().__init__(ACTION_BY_NAME[config.tracking_action])
+        self.tolerance_N = config.tracking_tolerance_N
+        self.command_N = 0.0
+        self._lag = LowPass(config.actuator_time_constant_s) if config.actuator_time_constant_s > 0 else None
+        self._timer = Persistence(config.tracking_time_s)
+        self._error_N = 0.0
+
+    def expected_N(self) -> float:
+        """The force the actuator should show now (N)."""
+        return self.command_N if self._lag is None else self._lag.y
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True once the tracking error has persisted for ``tracking_time_s``."""
+        if self._lag is not None:
+            self._lag.update(self.command_N, dt)
+        self._error_N = health.measured_force_N - self.expected_N()
+        return self._timer.update(t, not abs(self._error_N) <= self.tolerance_N)
+
+    def detail(self, health: TickHealth) -> str:
+        """Measured, expected, tolerance, duration."""
+        return (
+            f"measured {health.measured_force_N:.6g} N vs expected {self.expected_N():.6g} N "
+            f"(error {self._error_N:.6g} N), expected within {self.tolerance_N:g} N "
+            f"for less than {self._timer.limit_s:g} s"
+        )
+
+    def reset(self) -> None:
+        """Clear the lag (to zero force) and the timer."""
+        self.command_N = 0.0
+        if self._lag is not None:
+            self._lag.reset(0.0, True)
+        self._timer.reset()

@@ -1,0 +1,77 @@
+"""The per-tick health inputs the loop hands to the supervisor.
+
+One :class:`TickHealth` is allocated before a run and updated in place every tick
+by the loop (from the drivers, the bus and its own timing). It holds plain
+numbers and flags only; the supervisor never writes to it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from harness.signals import Measurements
+
+
+@dataclass(slots=True)
+class TickHealth:
+    """Everything the safety checks look at, besides the raw controller force.
+
+    Attributes
+    ----------
+    meas : Measurements
+        The same object the controller reads (SI); referenced, not copied.
+    table_fresh, base_fresh : bool
+        A new table / base-mat sensor frame was accepted this tick (stuck, jump and
+        disagreement checks only count fresh samples).
+    table_age_s, base_age_s : float
+        Age of the newest accepted table / base-mat sensor frame (s).
+    e2e_ok : bool
+        The newest frame of every safety-relevant message passed its counter and CRC check.
+    e2e_rejects : int
+        Cumulative count of frames rejected for counter or CRC (monotonic).
+    error_frames : int
+        Cumulative count of CAN error frames seen (monotonic).
+    error_passive, bus_off, bus_gone : bool
+        Controller error-passive; bus-off; the interface has disappeared or cannot be read.
+    send_failures : int
+        Cumulative count of failed sends (ENOBUFS and the like; monotonic).
+    foreign_command : bool
+        A frame with the actuator command ID was seen that this harness did not send.
+    drive_ready, drive_fault, pressure_ok : bool
+        From the newest actuator status frame.
+    actuator_status_age_s : float
+        Age of the newest actuator status frame (s).
+    measured_force_N : float
+        Force reported by the actuator's load cell (N).
+    consecutive_overruns : int
+        Ticks in a row that missed their deadline (0 after an on-time tick).
+    estop : bool
+        The operator E-stop frame is asserted.
+    operator_stop : bool
+        The operator asked for a controlled stop (first Ctrl-C).
+    operator_trip : bool
+        The operator asked for an immediate trip (second Ctrl-C, SIGTERM).
+    """
+
+    meas: Measurements = field(default_factory=Measurements)
+    table_fresh: bool = True
+    base_fresh: bool = True
+    table_age_s: float = 0.0
+    base_age_s: float = 0.0
+    e2e_ok: bool = True
+    e2e_rejects: int = 0
+    error_frames: int = 0
+    error_passive: bool = False
+    bus_off: bool = False
+    bus_gone: bool = False
+    send_failures: int = 0
+    foreign_command: bool = False
+    drive_ready: bool = True
+    drive_fault: bool = False
+    pressure_ok: bool = True
+    actuator_status_age_s: float = 0.0
+    measured_force_N: float = 0.0
+    consecutive_overruns: int = 0
+    estop: bool = False
+    operator_stop: bool = False
+    operator_trip: bool = False

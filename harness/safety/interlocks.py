@@ -1,0 +1,190 @@
+"""Stroke and force interlocks: small, pure, clock-free objects, configured in SI units.
+
+Each interlock has a stable :attr:`NAME` (see :mod:`harness.safety.events`), an
+:attr:`ACTION`, and the four documentation strings the safety table is built from
+(:attr:`DETECTS`, :attr:`BOUND`, :attr:`RESET`, and the action). After each call
+:attr:`acted` says whether the interlock changed the force or fired on that call.
+"""
+
+from __future__ import annotations
+
+from harness.safety.config import ForceConfig, StrokeConfig
+from harness.safety.events import Action
+
+#: Fade factors at or below this are exactly zero, so the band end is exact despite rounding of soft + band.
+_ZERO_FACTOR = 1e-9
+
+
+class StrokeSoftFade:
+    """Fade the outward force beyond the soft stroke limit.
+
+    Detects: ``|x_b|`` beyond ``soft_limit_m`` with a force of the same sign as
+    ``x_b`` (pushing further out). Action: FADE: the outward force is scaled by
+    ``1 - (|x_b| - soft_limit_m) / fade_band_m``, down to zero at and after
+    ``soft_limit_m + fade_band_m``; a force towards the centre passes untouched.
+    Bound: the same tick. Reset: none needed; it acts only while the condition holds.
+    """
+
+    NAME = "stroke_soft"
+    ACTION = Action.FADE
+    DETECTS = "outward force with |x_b| beyond the soft stroke limit"
+    BOUND = "same tick"
+    RESET = "none (acts only while |x_b| > soft limit)"
+
+    __slots__ = ("soft_m", "band_m", "acted")
+
+    def __init__(self, config: StrokeConfig) -> None:
+        self.soft_m = config.soft_limit_m
+        self.band_m = config.fade_band_m
+        self.acted = False
+
+    def scale(self, x_b_m: float) -> float:
+        """Factor applied to an outward force at sliding displacement ``x_b_m`` (m); 1 inside the soft limit."""
+        beyond = abs(x_b_m) - self.soft_m
+        if beyond <= 0.0:
+            return 1.0
+        factor = 1.0 - beyond / self.band_m
+        return factor if factor > _ZERO_FACTOR else 0.0
+
+    def apply(self, force_N: float, x_b_m: float) -> float:
+        """Return the force after the fade (N)."""
+        self.acted = False
+        if force_N * x_b_m <= 0.0:  # towards the centre, zero force, or x_b == 0
+            return force_N
+        factor = self.scale(x_b_m)
+        if factor >= 1.0:
+            return force_N
+        self.acted = True
+        return force_N * factor
+
+
+class StrokeHardLimit:
+    """Trip at the hard stroke limit.
+
+    Detects: ``|x_b| >= hard_limit_m``. Action: TRIP. Bound: the tick of the
+    sample. Reset: explicit reset, refused while ``|x_b| >= hard_limit_m``.
+    """
+
+    NAME = "stroke_hard"
+    ACTION = Action.TRIP
+    DETECTS = "|x_b| at or beyond the hard stroke limit"
+    BOUND = "same tick"
+    RESET = "explicit reset, refused while |x_b| >= hard limit"
+
+    __slots__ = ("hard_m", "acted")
+
+    def __init__(self, config: StrokeConfig) -> None:
+        self.hard_m = config.hard_limit_m
+        self.acted = False
+
+    def check(self, x_b_m: float) -> bool:
+        """True (trip) if ``|x_b_m| >= hard_limit_m``."""
+        self.acted = abs(x_b_m) >= self.hard_m
+        return self.acted
+
+    def detail(self, x_b_m: float) -> str:
+        """Why it tripped (built only on a trip)."""
+        return f"|x_b| = {abs(x_b_m):.6g} m, expected < {self.hard_m:g} m"
+
+
+class StrokePredictiveLimit:
+    """Trip when the stroke, projected over the stopping time, would pass the hard limit.
+
+    Detects: ``|x_b + xdot_b * stop_time_s| >= hard_limit_m``. Action: TRIP.
+    Bound: the tick of the sample. Reset: explicit reset (the condition is
+    re-evaluated: refused while the projection is still beyond the limit).
+    """
+
+    NAME = "stroke_predictive"
+    ACTION = Action.TRIP
+    DETECTS = "x_b + xdot_b * stop_time_s at or beyond the hard stroke limit"
+    BOUND = "same tick"
+    RESET = "explicit reset, refused while the projection is beyond the hard limit"
+
+    __slots__ = ("hard_m", "stop_time_s", "acted")
+
+    def __init__(self, config: StrokeConfig) -> None:
+        self.hard_m = config.hard_limit_m
+        self.stop_time_s = config.stop_time_s
+        self.acted = False
+
+    def projected(self, x_b_m: float, xdot_b_m_s: float) -> float:
+        """Projected stroke ``x_b + xdot_b * stop_time_s`` (m)."""
+        return x_b_m + xdot_b_m_s * self.stop_time_s
+
+    def check(self, x_b_m: float, xdot_b_m_s: float) -> bool:
+        """True (trip) if the projected stroke reaches the hard limit."""
+        self.acted = abs(self.projected(x_b_m, xdot_b_m_s)) >= self.hard_m
+        return self.acted
+
+    def detail(self, x_b_m: float, xdot_b_m_s: float) -> str:
+        """Why it tripped (built only on a trip)."""
+        return (
+            f"x_b + xdot_b * {self.stop_time_s:g} s = {self.projected(x_b_m, xdot_b_m_s):.6g} m "
+            f"(x_b = {x_b_m:.6g} m, xdot_b = {xdot_b_m_s:.6g} m/s), expected inside +/-{self.hard_m:g} m"
+        )
+
+
+class ForceClamp:
+    """Clamp the force magnitude.
+
+    Detects: ``|force| > max_force_N``. Action: CLAMP to ``+/-max_force_N``.
+    Bound: the same tick. Reset: none needed.
+    """
+
+    NAME = "force_clamp"
+    ACTION = Action.CLAMP
+    DETECTS = "|force| above max_force_N"
+    BOUND = "same tick"
+    RESET = "none (acts only while the demand exceeds the limit)"
+
+    __slots__ = ("max_N", "acted")
+
+    def __init__(self, config: ForceConfig) -> None:
+        self.max_N = config.max_force_N
+        self.acted = False
+
+    def apply(self, force_N: float) -> float:
+        """Return the force clamped to ``[-max_force_N, max_force_N]`` (N); the input must be finite."""
+        if force_N > self.max_N:
+            self.acted = True
+            return self.max_N
+        if force_N < -self.max_N:
+            self.acted = True
+            return -self.max_N
+        self.acted = False
+        return force_N
+
+
+class ForceRateLimit:
+    """Clamp the change of force per tick.
+
+    Detects: ``|force - previous| > max_force_rate_N_per_s * dt``. Action: CLAMP
+    the step to that size. Bound: the same tick. Reset: none needed; the previous
+    force is the last force the supervisor commanded (0 whenever the drive is off).
+    """
+
+    NAME = "force_rate"
+    ACTION = Action.CLAMP
+    DETECTS = "|d force / dt| above max_force_rate_N_per_s"
+    BOUND = "same tick"
+    RESET = "none (acts only while the demand changes too fast)"
+
+    __slots__ = ("max_rate_N_per_s", "acted")
+
+    def __init__(self, config: ForceConfig) -> None:
+        self.max_rate_N_per_s = config.max_force_rate_N_per_s
+        self.acted = False
+
+    def apply(self, force_N: float, previous_N: float, dt: float) -> float:
+        """Return ``force_N`` limited to ``previous_N +/- max_rate * dt`` (N)."""
+        step = self.max_rate_N_per_s * dt
+        if force_N > previous_N + step:
+            self.acted = True
+            return previous_N + step
+        if force_N < previous_N - step:
+            self.acted = True
+            return previous_N - step
+        self.acted = False
+        return force_N
+

@@ -1,0 +1,308 @@
+"""Detectors on the four control measurements ``x_0, xdot_0, y_b, ydot_b``.
+
+Channels are indexed 0..3 in that order; channels 0-1 come from the table sensor
+frame (fresh when ``health.table_fresh``), 2-3 from the base-mat frame
+(``health.base_fresh``). Stuck, jump and disagreement checks count fresh samples
+only, so a loop faster than the sensors does not see repeats that are not there.
+"""
+
+from __future__ import annotations
+
+import math
+
+from harness.safety.config import SensorConfig
+from harness.safety.detector_base import Detector, LowPass, Persistence
+from harness.safety.events import Action
+from harness.safety.health import TickHealth
+
+CHANNELS: tuple[str, ...] = ("x_0", "xdot_0", "y_b", "ydot_b")
+_IS_DISPLACEMENT = (True, False, True, False)
+
+
+def read_channels(health: TickHealth, out: list[float]) -> None:
+    """Copy the four measurements into the preallocated ``out`` (SI)."""
+    meas = health.meas
+    out[0] = meas.table_displacement_m
+    out[1] = meas.table_velocity_m_s
+    out[2] = meas.base_displacement_m
+    out[3] = meas.base_velocity_m_s
+
+
+def _fresh(health: TickHealth, channel: int) -> bool:
+    return health.table_fresh if channel < 2 else health.base_fresh
+
+
+class SensorInvalid(Detector):
+    """NaN, infinite or out-of-range measurement.
+
+    Detects: any of ``x_0, y_b`` not finite or with ``|value| > displacement_range_m``,
+    or ``xdot_0, ydot_b`` not finite or beyond ``velocity_range_m_s``.
+    Bound: the tick the value arrives. Action: TRIP.
+    Reset: explicit reset, refused while a value is still invalid.
+    """
+
+    NAME = "sensor_invalid"
+    ACTION = Action.TRIP
+    DETECTS = "NaN, infinite or out-of-range x_0, xdot_0, y_b or ydot_b"
+    BOUND = "same tick"
+    RESET = "explicit reset, refused while a value is still invalid"
+
+    __slots__ = ("limits", "_now")
+
+    def __init__(self, config: SensorConfig) -> None:
+        super().__init__()
+        d, v = config.displacement_range_m, config.velocity_range_m_s
+        self.limits = (d, v, d, v)
+        self._now = [0.0] * 4
+
+    def _bad_channel(self, health: TickHealth) -> int:
+        read_channels(health, self._now)
+        for k in range(4):
+            value = self._now[k]
+            if not math.isfinite(value) or abs(value) > self.limits[k]:
+                return k
+        return -1
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True while any measurement is invalid."""
+        return self._bad_channel(health) >= 0
+
+    def detail(self, health: TickHealth) -> str:
+        """Which channel, its value and its allowed range."""
+        k = self._bad_channel(health)
+        if k < 0:
+            return "all measurements valid"
+        return f"{CHANNELS[k]} = {self._now[k]!r}, expected finite and within +/-{self.limits[k]:g}"
+
+    def present(self, health: TickHealth) -> str:
+        """Still invalid?"""
+        return self.detail(health) if self._bad_channel(health) >= 0 else ""
+
+
+class SensorStale(Detector):
+    """Sensor data too old.
+
+    Detects: ``table_age_s`` or ``base_age_s`` above ``max_sensor_age_s`` (or not finite).
+    Bound: the first tick the age exceeds the limit. Action: TRIP.
+    Reset: explicit reset, refused while the data are still stale.
+    """
+
+    NAME = "sensor_stale"
+    ACTION = Action.TRIP
+    DETECTS = "table or base-mat sensor frame older than max_sensor_age_s"
+    BOUND = "first tick with age > max_sensor_age_s"
+    RESET = "explicit reset, refused while still stale"
+
+    __slots__ = ("max_age_s",)
+
+    def __init__(self, config: SensorConfig) -> None:
+        super().__init__()
+        self.max_age_s = config.max_sensor_age_s
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True while either age is above the limit."""
+        return not (health.table_age_s <= self.max_age_s and health.base_age_s <= self.max_age_s)
+
+    def detail(self, health: TickHealth) -> str:
+        """Both ages and the limit."""
+        return (
+            f"table age {health.table_age_s * 1e3:.3g} ms, base age {health.base_age_s * 1e3:.3g} ms, "
+            f"expected <= {self.max_age_s * 1e3:.3g} ms"
+        )
+
+    def present(self, health: TickHealth) -> str:
+        """Still stale?"""
+        return self.detail(health) if self.update(0.0, 0.0, health) else ""
+
+
+class SensorJump(Detector):
+    """Implausible jump between consecutive fresh samples.
+
+    Detects: ``|value - previous fresh value| > jump_limit_m`` (displacements) or
+    ``> jump_limit_m_s`` (velocities). Bound: the first sample after the jump.
+    Action: TRIP. Reset: explicit reset (not knowable from one sample; the
+    history is cleared on reset and arm).
+    """
+
+    NAME = "sensor_jump"
+    ACTION = Action.TRIP
+    DETECTS = "change between consecutive samples above jump_limit_m / jump_limit_m_s"
+    BOUND = "the sample after the jump (1 sensor period)"
+    RESET = "explicit reset; history cleared"
+
+    __slots__ = ("limits", "_prev", "_primed", "_now", "_channel", "_delta")
+
+    def __init__(self, config: SensorConfig) -> None:
+        super().__init__()
+        d, v = config.jump_limit_m, config.jump_limit_m_s
+        self.limits = (d, v, d, v)
+        self._prev = [0.0] * 4
+        self._primed = [False] * 4
+        self._now = [0.0] * 4
+        self._channel = -1
+        self._delta = 0.0
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True on a sample that jumped."""
+        read_channels(health, self._now)
+        fired = False
+        for k in range(4):
+            if not _fresh(health, k):
+                continue
+            value = self._now[k]
+            if self._primed[k] and not fired:
+                delta = value - self._prev[k]
+                if abs(delta) > self.limits[k]:
+                    fired = True
+                    self._channel = k
+                    self._delta = delta
+            self._prev[k] = value
+            self._primed[k] = True
+        return fired
+
+    def detail(self, health: TickHealth) -> str:
+        """Channel, step and limit."""
+        k = self._channel
+        return f"{CHANNELS[k]} changed by {self._delta:.6g} in one sample, expected at most {self.limits[k]:g}"
+
+    def reset(self) -> None:
+        """Forget the previous samples."""
+        for k in range(4):
+            self._primed[k] = False
+
+
+class SensorStuck(Detector):
+    """A measurement frozen while the table moves.
+
+    Detects: a channel whose fresh samples are bit-identical to the one before for
+    ``stuck_samples`` samples in a row while ``|xdot_0| > stuck_table_speed_m_s``.
+    Bound: ``stuck_samples`` fresh samples after the value froze. Action: TRIP.
+    Reset: explicit reset (counts cleared).
+    """
+
+    NAME = "sensor_stuck"
+    ACTION = Action.TRIP
+    DETECTS = "value unchanged to the bit for stuck_samples samples while |xdot_0| > stuck_table_speed_m_s"
+    BOUND = "stuck_samples repeated samples"
+    RESET = "explicit reset; counts cleared"
+
+    __slots__ = ("samples", "speed_m_s", "_prev", "_primed", "_repeats", "_now", "_channel")
+
+    def __init__(self, config: SensorConfig) -> None:
+        super().__init__()
+        self.samples = config.stuck_samples
+        self.speed_m_s = config.stuck_table_speed_m_s
+        self._prev = [0.0] * 4
+        self._primed = [False] * 4
+        self._repeats = [0] * 4
+        self._now = [0.0] * 4
+        self._channel = -1
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True once a channel has repeated ``stuck_samples`` times with the table moving."""
+        read_channels(health, self._now)
+        moving = abs(self._now[1]) > self.speed_m_s
+        fired = False
+        for k in range(4):
+            if not _fresh(health, k):
+                continue
+            value = self._now[k]
+            same = self._primed[k] and value == self._prev[k]
+            self._repeats[k] = self._repeats[k] + 1 if (same and moving) else 0
+            self._prev[k] = value
+            self._primed[k] = True
+            if self._repeats[k] >= self.samples and not fired:
+                fired = True
+                self._channel = k
+        return fired
+
+    def detail(self, health: TickHealth) -> str:
+        """Channel and count."""
+        k = self._channel
+        return (
+            f"{CHANNELS[k]} = {self._prev[k]!r} repeated {self._repeats[k]} times while the table moves "
+            f"(|xdot_0| > {self.speed_m_s:g} m/s), expected fewer than {self.samples}"
+        )
+
+    def reset(self) -> None:
+        """Forget samples and counts."""
+        for k in range(4):
+            self._primed[k] = False
+            self._repeats[k] = 0
+
+
+class SensorDisagree(Detector):
+    """Displacement and velocity sensors that disagree.
+
+    Detects: for the table (``x_0``, ``xdot_0``) and the base mat (``y_b``,
+    ``ydot_b``), the finite-difference derivative of the displacement and the
+    measured velocity, both through the same first-order low-pass
+    (``disagree_filter_s``), differing by more than ``disagree_tolerance_m_s``.
+    Bound: ``disagree_time_s`` after the filtered difference first exceeds the
+    tolerance (the filter adds its own lag to the onset). Action: TRIP.
+    Reset: explicit reset (filters and timers cleared).
+    """
+
+    NAME = "sensor_disagree"
+    ACTION = Action.TRIP
+    DETECTS = "filtered d(displacement)/dt and measured velocity differ by more than disagree_tolerance_m_s"
+    BOUND = "disagree_time_s after the filtered difference exceeds the tolerance"
+    RESET = "explicit reset; filters cleared"
+
+    __slots__ = ("tolerance_m_s", "_deriv", "_vel", "_timers", "_prev_x", "_since_s", "_primed", "_now", "_pair")
+
+    def __init__(self, config: SensorConfig) -> None:
+        super().__init__()
+        self.tolerance_m_s = config.disagree_tolerance_m_s
+        tau = config.disagree_filter_s
+        self._deriv = (LowPass(tau), LowPass(tau))
+        self._vel = (LowPass(tau), LowPass(tau))
+        self._timers = (Persistence(config.disagree_time_s), Persistence(config.disagree_time_s))
+        self._prev_x = [0.0, 0.0]
+        self._since_s = [0.0, 0.0]
+        self._primed = [False, False]
+        self._now = [0.0] * 4
+        self._pair = 0
+
+    def _step_pair(self, t: float, dt: float, pair: int, fresh: bool) -> bool:
+        self._since_s[pair] += dt
+        if fresh:
+            x, v = self._now[2 * pair], self._now[2 * pair + 1]
+            if self._primed[pair] and self._since_s[pair] > 0.0:
+                span = self._since_s[pair]
+                self._deriv[pair].update((x - self._prev_x[pair]) / span, span)
+                self._vel[pair].update(v, span)
+            elif not self._primed[pair]:
+                self._deriv[pair].reset(v, True)
+                self._vel[pair].reset(v, True)
+            self._prev_x[pair] = x
+            self._primed[pair] = True
+            self._since_s[pair] = 0.0
+        error = abs(self._deriv[pair].y - self._vel[pair].y)
+        return self._timers[pair].update(t, error > self.tolerance_m_s)
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True once either pair has disagreed for ``disagree_time_s``."""
+        read_channels(health, self._now)
+        table = self._step_pair(t, dt, 0, health.table_fresh)
+        base = self._step_pair(t, dt, 1, health.base_fresh)
+        if table or base:
+            self._pair = 0 if table else 1
+        return table or base
+
+    def detail(self, health: TickHealth) -> str:
+        """Which pair, both filtered values, tolerance."""
+        p = self._pair
+        return (
+            f"d{CHANNELS[2 * p]}/dt filtered = {self._deriv[p].y:.6g} m/s, {CHANNELS[2 * p + 1]} filtered = "
+            f"{self._vel[p].y:.6g} m/s, expected within {self.tolerance_m_s:g} m/s"
+        )
+
+    def reset(self) -> None:
+        """Clear filters and timers."""
+        for p in range(2):
+            self._primed[p] = False
+            self._since_s[p] = 0.0
+            self._deriv[p].reset()
+            self._vel[p].reset()
+            self._timers[p].reset()

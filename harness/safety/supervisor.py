@@ -1,0 +1,391 @@
+"""The safety supervisor: the only producer of the command the actuator writer accepts.
+
+The loop calls :meth:`Supervisor.update` once per tick, between the controller
+and the actuator write, with the loop's time ``t`` and step ``dt`` (s), the
+preallocated :class:`~harness.safety.health.TickHealth` and the controller's raw
+force. It returns the same preallocated :class:`SupervisedCommand` every tick.
+
+Order of evaluation in ARMED, RUNNING and STOPPING (fixed; the first TRIP wins
+and is latched as the reason, later checks are not evaluated on that tick):
+
+1. ``loop_timing``: ``t`` finite and ``dt`` finite and > 0.
+2. Operator: ``estop``, ``operator_trip``, ``operator_stop``.
+3. Sensors: ``sensor_invalid``, ``sensor_stale``, ``sensor_jump``, ``sensor_stuck``, ``sensor_disagree``.
+4. CAN: ``bus_gone``, ``bus_off``, ``bus_error_passive``, ``bus_error_frames``, ``e2e_rejects``,
+   ``bus_send_failures``, ``foreign_command``.
+5. Actuator: ``drive_fault``, ``hydraulic_pressure``, ``actuator_status_stale``, ``force_tracking``.
+6. ``loop_overruns``.
+7. ``controller_output``: the raw force must be finite.
+8. Stroke trips: ``stroke_hard``, then ``stroke_predictive``.
+9. Force shaping: ``force_clamp`` -> ``stop_ramp`` (STOPPING; zero target in ARMED) ->
+   ``force_rate`` -> ``stroke_soft``.
+10. Lifecycle: STOPPING becomes DONE on the first tick at or after the ramp time
+    whose shaped force is exactly zero (at once if the stop came from ARMED,
+    where no force was applied).
+
+The stroke fade comes after the rate limit: a fade may cut an outward force
+towards zero faster than the rate limit (as a trip does), but the force never
+grows faster than the rate limit, and never pushes outward beyond
+``soft_limit_m + fade_band_m``. In IDLE and DONE only ``estop`` and
+``operator_trip`` are watched (they latch TRIPPED, which blocks arming until reset);
+in every state but ARMED, RUNNING and STOPPING the command is force 0, enable False.
+"""
+
+from __future__ import annotations
+
+import math
+
+from harness.errors import ProfileError
+from harness.safety.actuator_detectors import ActuatorStatusStale, DriveFault, ForceTracking, HydraulicPressure
+from harness.safety.comms_detectors import (
+    BusErrorFrames,
+    BusErrorPassive,
+    BusGone,
+    BusOff,
+    BusSendFailures,
+    E2eRejects,
+    ForeignCommand,
+)
+from harness.safety.config import SafetyConfig, check_config
+from harness.safety.detector_base import TIME_EPS_S, Detector
+from harness.safety.events import CHECK_NAMES, Action, EventKind, EventRing, bit, index
+from harness.safety.health import TickHealth
+from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
+from harness.safety.lifecycle import DRIVE_STATES, Lifecycle, State
+from harness.safety.operator_detectors import EStop, LoopOverruns, OperatorStop, OperatorTrip
+from harness.safety.prearm import pre_arm_failures
+from harness.safety.sensor_detectors import SensorDisagree, SensorInvalid, SensorJump, SensorStale, SensorStuck
+
+_SLOT = {name: k for k, name in enumerate(CHECK_NAMES)}
+_B_CLAMP, _B_RATE, _B_SOFT = bit("force_clamp"), bit("force_rate"), bit("stroke_soft")
+_B_RAMP = bit("stop_ramp")
+_I_CLAMP, _I_RATE, _I_SOFT, _I_RAMP = index("force_clamp"), index("force_rate"), index("stroke_soft"), index("stop_ramp")
+
+
+class SupervisedCommand:
+    """The command for the actuator writer; one preallocated object, overwritten every tick.
+
+    Attributes
+    ----------
+    t : float
+        Loop time of the tick that produced it (s).
+    force_N : float
+        Force to command (N); 0 whenever ``enable`` is False.
+    enable : bool
+        Drive enable; True only in ARMED, RUNNING and STOPPING.
+    state : State
+        Lifecycle state after this tick.
+    acted : int
+        Bit flags (:func:`harness.safety.events.bit`) of every check that acted this tick.
+    trip_reason : str
+        Name of the latched trip reason ("" if not tripped).
+    """
+
+    __slots__ = ("t", "force_N", "enable", "state", "acted", "trip_reason")
+
+    def __init__(self) -> None:
+        self.t = 0.0
+        self.force_N = 0.0
+        self.enable = False
+        self.state = State.IDLE
+        self.acted = 0
+        self.trip_reason = ""
+
+
+class Supervisor:
+    """Interlocks, detectors and the lifecycle; clock-free, no I/O, no per-tick allocation.
+
+    Parameters
+    ----------
+    config : SafetyConfig
+        Must pass :func:`~harness.safety.config.check_config`.
+
+    Raises
+    ------
+    ProfileError
+        If the configuration is inconsistent (every problem listed).
+
+    Attributes
+    ----------
+    command : SupervisedCommand
+        The object :meth:`update` returns.
+    events : EventRing
+        Events since the loop last drained them.
+    act_ticks : list of int
+        Per check (index as in :data:`~harness.safety.events.CHECK_NAMES`), ticks it acted on.
+    """
+
+    __slots__ = (
+        "config", "lifecycle", "command", "events", "act_ticks", "soft", "hard", "predictive", "clamp", "rate",
+        "tracking", "_estop", "_operator_trip", "detectors", "_bits", "_slots", "_previous_N", "_ramp_gain",
+        "_last_acted",
+    )
+
+    def __init__(self, config: SafetyConfig) -> None:
+        problems = check_config(config)
+        if problems:
+            raise ProfileError("inconsistent safety configuration: " + "; ".join(problems), key_path="safety")
+        self.config = config
+        self.lifecycle = Lifecycle()
+        self.command = SupervisedCommand()
+        self.events = EventRing(config.run.event_capacity)
+        self.act_ticks = [0] * len(CHECK_NAMES)
+        self.soft = StrokeSoftFade(config.stroke)
+        self.hard = StrokeHardLimit(config.stroke)
+        self.predictive = StrokePredictiveLimit(config.stroke)
+        self.clamp = ForceClamp(config.force)
+        self.rate = ForceRateLimit(config.force)
+        self.tracking = ForceTracking(config.force)
+        self._estop, self._operator_trip = EStop(), OperatorTrip()
+        self.detectors: tuple[Detector, ...] = (
+            self._estop, self._operator_trip, OperatorStop(),
+            SensorInvalid(config.sensors), SensorStale(config.sensors), SensorJump(config.sensors),
+            SensorStuck(config.sensors), SensorDisagree(config.sensors),
+            BusGone(), BusOff(), BusErrorPassive(config.comms), BusErrorFrames(config.comms),
+            E2eRejects(config.comms), BusSendFailures(config.comms), ForeignCommand(),
+            DriveFault(), HydraulicPressure(), ActuatorStatusStale(config.actuator), self.tracking,
+            LoopOverruns(config.run),
+        )
+        self._bits = tuple(bit(d.NAME) for d in self.detectors)
+        self._slots = tuple(index(d.NAME) for d in self.detectors)
+        self._previous_N = 0.0
+        self._ramp_gain = 0.0
+        self._last_acted = 0
+
+    # ---------------------------------------------------------------- lifecycle requests
+
+    @property
+    def state(self) -> State:
+        """Current lifecycle state."""
+        return self.lifecycle.state
+
+    @property
+    def trip_detail(self) -> str:
+        """What the latched trip reason saw ("" if not tripped)."""
+        return self.lifecycle.trip_detail
+
+    def act_counts(self) -> dict[str, int]:
+        """Ticks each check acted on, by name (non-zero only; allocates: for reports, not per tick)."""
+        return {name: n for name, n in zip(CHECK_NAMES, self.act_ticks) if n}
+
+    def _state_event(self, t: float, before: State, why: str) -> None:
+        after = self.lifecycle.state
+        self.events.push(t, EventKind.STATE, after.name, f"{before.name} -> {after.name}: {why}")
+        self.command.state = after
+        self.command.trip_reason = self.lifecycle.trip_reason
+
+    def _clear_history(self) -> None:
+        for detector in self.detectors:
+            detector.reset()
+        self._previous_N = 0.0
+        self._last_acted = 0
+
+    def arm(self, t: float, health: TickHealth) -> None:
+        """IDLE -> ARMED if every pre-arm check passes.
+
+        Raises
+        ------
+        ArmRefused
+            Listing every failed check (see :data:`~harness.safety.prearm.PRE_ARM_CHECKS`).
+        IllegalTransition
+            If not IDLE.
+        """
+        before = self.lifecycle.state
+        self.lifecycle.arm(t, pre_arm_failures(self.config, health) if before is State.IDLE else ())
+        self._clear_history()
+        self._state_event(t, before, "armed: all pre-arm checks passed")
+
+    def start(self, t: float) -> None:
+        """ARMED -> RUNNING. Raises IllegalTransition otherwise."""
+        before = self.lifecycle.state
+        self.lifecycle.start(t)
+        self._state_event(t, before, "start")
+
+    def stop(self, t: float, why: str = "stop requested") -> None:
+        """ARMED/RUNNING -> STOPPING: ramp the force to zero over ``stopping_ramp_s``, then DONE."""
+        before = self.lifecycle.state
+        self.lifecycle.stop(t)
+        self._ramp_gain = 1.0 if before is State.RUNNING else 0.0
+        self._state_event(t, before, why)
+
+    def trip(self, t: float, reason: str, detail: str = "") -> SupervisedCommand:
+        """Latch TRIPPED with ``reason`` (a name from CHECK_NAMES); return the zero, disabled command.
+
+        Never raises: an unknown ``reason`` is latched as given, without a counter or flag.
+        """
+        before = self.lifecycle.state
+        if self.lifecycle.trip(t, reason, detail):
+            slot = _SLOT.get(reason)
+            if slot is not None:
+                self.act_ticks[slot] += 1
+                self.command.acted |= 1 << slot
+            self.events.push(t, EventKind.FAULT, reason, detail)
+            self._state_event(t, before, reason)
+        return self._off(t)
+
+    def report_exception(self, t: float, exc: BaseException) -> SupervisedCommand:
+        """The loop caught ``exc`` in a tick: trip with reason ``tick_exception``."""
+        return self.trip(t, "tick_exception", f"{type(exc).__name__}: {exc}")
+
+    def _still_present(self, health: TickHealth) -> str:
+        reason = self.lifecycle.trip_reason
+        meas = health.meas
+        if reason == "stroke_hard" and self.hard.check(meas.sliding_displacement_m):
+            return self.hard.detail(meas.sliding_displacement_m)
+        if reason == "stroke_predictive" and self.predictive.check(meas.sliding_displacement_m, meas.sliding_velocity_m_s):
+            return self.predictive.detail(meas.sliding_displacement_m, meas.sliding_velocity_m_s)
+        for detector in self.detectors:
+            if detector.NAME == reason:
+                return detector.present(health)
+        return ""
+
+    def reset(self, t: float, health: TickHealth) -> None:
+        """TRIPPED or DONE -> IDLE, clearing the latch and all detector history.
+
+        Raises
+        ------
+        ResetRefused
+            If the trip condition is still visible in ``health``.
+        IllegalTransition
+            From any other state.
+        """
+        before = self.lifecycle.state
+        present = self._still_present(health) if before is State.TRIPPED else ""
+        self.lifecycle.reset(t, present)
+        self._clear_history()
+        self._state_event(t, before, "reset")
+        self._off(t)
+
+    # ---------------------------------------------------------------- the tick
+
+    def _off(self, t: float) -> SupervisedCommand:
+        command = self.command
+        command.t = t
+        command.force_N = 0.0
+        command.enable = False
+        command.state = self.lifecycle.state
+        command.trip_reason = self.lifecycle.trip_reason
+        self._previous_N = 0.0
+        self.tracking.command_N = 0.0
+        return command
+
+    def _count(self, t: float, slot: int, flag: int, name: str) -> bool:
+        """Count an acting check; True on its rising edge (an event is due)."""
+        self.act_ticks[slot] += 1
+        self.command.acted |= flag
+        return not self._last_acted & flag
+
+    def _note_interlock(self, t: float, slot: int, flag: int, name: str) -> None:
+        if self._count(t, slot, flag, name):
+            self.events.push(t, EventKind.INTERLOCK, name, "")
+
+    def _run_detectors(self, t: float, dt: float, health: TickHealth) -> bool:
+        """Run every detector in order; True if one tripped."""
+        bits, slots = self._bits, self._slots
+        for k, detector in enumerate(self.detectors):
+            if not detector.update(t, dt, health):
+                continue
+            action = detector.action
+            if action is Action.TRIP:
+                self.trip(t, detector.NAME, detector.detail(health))
+                return True
+            if self._count(t, slots[k], bits[k], detector.NAME):
+                self.events.push(t, EventKind.FAULT, detector.NAME, detector.detail(health))
+            if action is Action.SAFE_STOP and self.lifecycle.state in (State.ARMED, State.RUNNING):
+                self.stop(t, detector.NAME)
+        return False
+
+    def _watch_idle(self, t: float, health: TickHealth) -> None:
+        if self.lifecycle.state is State.TRIPPED:
+            return
+        for detector in (self._estop, self._operator_trip):
+            if detector.update(t, 0.0, health):
+                self.trip(t, detector.NAME, detector.detail(health))
+                return
+
+    def _shape(self, t: float, dt: float, raw_force_N: float, x_b_m: float) -> float:
+        """Clamp, stopping ramp, rate limit, stroke fade; flags what acted."""
+        state = self.lifecycle.state
+        force = self.clamp.apply(raw_force_N)
+        if self.clamp.acted:
+            self._note_interlock(t, _I_CLAMP, _B_CLAMP, "force_clamp")
+        if state is State.ARMED:
+            force = 0.0
+        elif state is State.STOPPING:
+            elapsed = t - self.lifecycle.entered_s
+            force *= self._ramp_gain * max(0.0, 1.0 - elapsed / self.config.run.stopping_ramp_s)
+            self._note_interlock(t, _I_RAMP, _B_RAMP, "stop_ramp")
+        force = self.rate.apply(force, self._previous_N, dt)
+        if self.rate.acted:
+            self._note_interlock(t, _I_RATE, _B_RATE, "force_rate")
+        force = self.soft.apply(force, x_b_m)
+        if self.soft.acted:
+            self._note_interlock(t, _I_SOFT, _B_SOFT, "stroke_soft")
+        return force
+
+    def update(self, t: float, dt: float, health: TickHealth, raw_force_N: float) -> SupervisedCommand:
+        """Supervise one tick and return the command to write.
+
+        Parameters
+        ----------
+        t : float
+            Loop time of this tick (s).
+        dt : float
+            Time since the previous tick (s), > 0.
+        health : TickHealth
+            This tick's health inputs (updated in place by the loop).
+        raw_force_N : float
+            The controller's force (N); NaN or inf trips ``controller_output``.
+
+        Returns
+        -------
+        SupervisedCommand
+            The preallocated command; ``enable`` is False and ``force_N`` 0 outside ARMED/RUNNING/STOPPING.
+        """
+        command = self.command
+        command.acted = 0
+        if self.lifecycle.state not in DRIVE_STATES:
+            self._watch_idle(t, health)
+            return self._finish_tick(self._off(t))
+        if not (math.isfinite(t) and math.isfinite(dt) and dt > 0.0):
+            detail = f"t = {t!r} s, dt = {dt!r} s, expected finite t and dt > 0"
+            self.trip(t if math.isfinite(t) else 0.0, "loop_timing", detail)
+            return self._finish_tick(self.command)
+        if self._run_detectors(t, dt, health) or not self._check_output_and_stroke(t, health, raw_force_N):
+            return self._finish_tick(self.command)
+        force = self._shape(t, dt, raw_force_N, health.meas.sliding_displacement_m)
+        if self._ramp_done(t, force):
+            self.lifecycle.finish(t)
+            self._state_event(t, State.STOPPING, "stopping ramp complete")
+            return self._finish_tick(self._off(t))
+        self._previous_N = force
+        self.tracking.command_N = force
+        command.t = t
+        command.force_N = force
+        command.enable = True
+        command.state = self.lifecycle.state
+        command.trip_reason = ""
+        return self._finish_tick(command)
+
+    def _check_output_and_stroke(self, t: float, health: TickHealth, raw_force_N: float) -> bool:
+        """False (and tripped) if the raw force is not finite or the stroke trips."""
+        if not math.isfinite(raw_force_N):
+            self.trip(t, "controller_output", f"controller output not finite: {raw_force_N!r} N")
+            return False
+        x_b, v_b = health.meas.sliding_displacement_m, health.meas.sliding_velocity_m_s
+        if self.hard.check(x_b):
+            self.trip(t, "stroke_hard", self.hard.detail(x_b))
+            return False
+        if self.predictive.check(x_b, v_b):
+            self.trip(t, "stroke_predictive", self.predictive.detail(x_b, v_b))
+            return False
+        return True
+
+    def _ramp_done(self, t: float, force_N: float) -> bool:
+        if self.lifecycle.state is not State.STOPPING or force_N != 0.0:
+            return False
+        return t - self.lifecycle.entered_s >= self.config.run.stopping_ramp_s - TIME_EPS_S or self._ramp_gain == 0.0
+
+    def _finish_tick(self, command: SupervisedCommand) -> SupervisedCommand:
+        self._last_acted = command.acted
+        return command

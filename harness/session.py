@@ -1,0 +1,195 @@
+"""One control session on a bus: what ``harness dry-run`` and ``harness run`` share.
+
+Opens the harness side of the CAN link (the bus load and protocol version are checked
+before anything is opened), builds the controller, the friction estimator and the
+safety supervisor from the profile, creates the run folder and taps the raw CAN traffic
+into it, runs the loop under the live console, and closes everything whatever happens:
+the last frame the harness sends is always zero force with the drive disabled.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from drivers.config import CanConfig
+from drivers.link import open_harness
+from harness import exit_codes
+from harness.console import LiveConsole
+from harness.control.estimator import FrictionEstimator
+from harness.errors import ProfileError
+from harness.loop.row import COLUMNS, N_STORIES
+from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult, LoopStatus
+from harness.loop.tick import ControlTick
+from harness.peaks import peak_responses
+from harness.profile import Profile
+from harness.record import RunFolder, load_run
+from harness.safety.supervisor import Supervisor
+from harness.study import make_controller
+
+OUTCOME_EXIT = {"completed": exit_codes.OK, "tripped": exit_codes.TRIPPED, "stopped": exit_codes.STOPPED}
+
+
+@dataclass
+class SessionSettings:
+    """How one session runs (the command line's choices, resolved)."""
+
+    kind: str
+    can: CanConfig
+    rate_hz: float
+    duration_s: float
+    controller: str
+    log_dir: Path
+    lockstep: bool = False
+    show_console: bool = True
+    metadata: dict = field(default_factory=dict)
+
+
+@dataclass
+class SessionResult:
+    """What a session produced."""
+
+    outcome: str
+    trip_reason: str
+    run_path: Path
+    loop: LoopResult
+    bus: dict = field(default_factory=dict)
+
+    @property
+    def exit_code(self) -> int:
+        """The command's exit status for this outcome."""
+        return OUTCOME_EXIT.get(self.outcome, exit_codes.INTERNAL_ERROR)
+
+
+class _SentFrameTap:
+    """Records sent frames with a wall-clock timestamp (the writer stamps them with loop time)."""
+
+    __slots__ = ("record",)
+
+    def __init__(self, record: Callable):
+        self.record = record
+
+    def __call__(self, msg) -> None:
+        msg.timestamp = time.time()
+        self.record(msg)
+
+
+def build_controller_for_rig(profile: Profile, name: str):
+    """The named design, refused if it needs states a rig does not measure."""
+    controller = make_controller(profile, name)
+    if controller.needs_full_state:
+        raise ProfileError(
+            f"controller {name!r} needs the full state Z; a rig measures only x_0, xdot_0, y_b, ydot_b. "
+            "Use a phi or simple_output design on the table (full-state designs are for harness simulate)",
+            profile.source_path, "control.controller",
+        )
+    return controller
+
+
+def bus_statistics(link) -> dict:
+    """Frames received, rejected by kind, sent, and the bus's error counters (for metadata and benchmarks)."""
+    from drivers.decoder import RxStatus
+
+    reader, health = link.reader, link.reader.health
+    counts = reader.decoder.counts
+    return {
+        "frames_received": reader.counters.frames,
+        "rejected": {status.name.lower(): counts[status] for status in RxStatus if status is not RxStatus.OK and counts[status]},
+        "frames_lost": counts[RxStatus.SKIPPED_COUNTER],
+        "polls_capped": reader.counters.polls_capped,
+        "foreign_commands": reader.counters.foreign_commands,
+        "error_frames": health.error_frames,
+        "send_failures": health.send_failures,
+    }
+
+
+def _metadata(profile: Profile, settings: SessionSettings) -> dict:
+    stroke, force = profile.safety.stroke, profile.safety.force
+    return {
+        "controller": settings.controller,
+        "rate_hz": settings.rate_hz,
+        "lockstep": settings.lockstep,
+        "can": {"interface": settings.can.interface, "channel": settings.can.channel, "bitrate_bps": settings.can.bitrate_bps},
+        "total_weight_N": profile.structure.total_weight_N,
+        "stroke_soft_limit_m": stroke.soft_limit_m,
+        "stroke_hard_limit_m": stroke.hard_limit_m,
+        "force_limit_N": force.max_force_N,
+        **settings.metadata,
+    }
+
+
+def run_session(
+    profile: Profile,
+    settings: SessionSettings,
+    *,
+    on_start: Callable[[float], None] | None = None,
+    make_lockstep: Callable[[ControlTick], Callable[[int, float], bool]] | None = None,
+    on_link: Callable[[object], None] | None = None,
+    console=None,
+) -> SessionResult:
+    """Run one session and return its outcome; the run folder is finished in every case.
+
+    Parameters
+    ----------
+    profile : Profile
+    settings : SessionSettings
+    on_start : callable, optional
+        Called with the loop time when RUNNING begins.
+    make_lockstep : callable, optional
+        Given the tick, returns the lockstep wait function (``settings.lockstep`` must be True).
+    on_link : callable, optional
+        Called with the open harness link before the loop starts (e.g. to switch a virtual rig to lockstep).
+    console : rich Console, optional
+    """
+    if profile.structure.n_stories != N_STORIES:
+        raise ProfileError(f"the CAN protocol carries {N_STORIES} stories; this profile has {profile.structure.n_stories}",
+                           profile.source_path, "structure")
+    controller = build_controller_for_rig(profile, settings.controller)
+    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    supervisor = Supervisor(profile.safety)
+    link = open_harness(settings.can)
+    folder = None
+    try:
+        folder = RunFolder.create(
+            settings.log_dir, profile.name, settings.kind, profile.resolved_data(), COLUMNS,
+            metadata=_metadata(profile, settings),
+        ).start()
+        heartbeat_every = max(1, round(settings.rate_hz / settings.can.heartbeat_rate_hz))
+        tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every)
+        link.reader.tap = folder.record_frame
+        link.writer.tap = _SentFrameTap(folder.record_frame)
+        if on_link is not None:
+            on_link(link)
+        lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None
+        status = LoopStatus()
+        loop = ControlLoop(tick, profile.loop, settings.rate_hz, settings.duration_s, lockstep, on_start, status)
+        title = f"{profile.name}: {settings.kind}, {settings.controller} at {settings.rate_hz:g} Hz" + (" (lockstep)" if lockstep else "")
+        with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,
+                         profile.safety.force.max_force_N, title, loop.timing, console, settings.show_console):
+            try:
+                result = loop.run()
+            except ArmTimeout as err:
+                folder.record_event(None, "fault", "arm_refused", str(err))
+                folder.finish("error", trip_reason=f"arm refused: {err.failed}")
+                raise
+        bus = bus_statistics(link)
+        folder.finish(result.outcome, trip_reason=result.trip_reason or None,
+                      summary={"timing": result.timing, "realtime": result.realtime_report, "bus": bus})
+        return SessionResult(result.outcome, result.trip_reason, folder.path, result, bus)
+    except BaseException:
+        if folder is not None:
+            folder.finish("error")  # idempotent: keeps an outcome already written
+        raise
+    finally:
+        link.writer.tap = None
+        link.reader.tap = None
+        link.close()
+
+
+def run_peaks(run_path: Path, total_weight_N: float) -> dict:
+    """Peaks of a finished run folder, over the ticks of the run (ARMED to DONE)."""
+    data = load_run(run_path)
+    columns = {name: data[name] for name in data.columns}
+    return peak_responses(columns, total_weight_N)
