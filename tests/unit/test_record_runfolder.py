@@ -245,7 +245,7 @@ def test_bad_requests_raise_run_folder_error(tmp_path: Path, kind: str, columns:
 
 
 def test_unknown_outcome_is_refused(folder: RunFolder) -> None:
-    with pytest.raises(RunFolderError, match="expected one of completed, tripped, error, incomplete"):
+    with pytest.raises(RunFolderError, match="expected one of completed, stopped, tripped, error, incomplete"):
         folder.finish("aborted")
 
 
