@@ -66,6 +66,11 @@ def _add_simulate(sub) -> None:
         "--design-stiffness-scale", type=float, metavar="X",
         help="controller's model has story stiffness x X (robustness: 0.7, 1.3)",
     )
+    control.add_argument(
+        "--rig-effects", action="store_true",
+        help="controlled case through the profile's rig models: sensor noise, quantization and delay, "
+        "actuator dynamics and limits, and the safety supervisor (what a dry run should reproduce)",
+    )
     output = parser.add_argument_group("output")
     output.add_argument("--json", metavar="PATH", help="write peaks and record facts as JSON (SI units)")
     output.add_argument("--out", metavar="DIR", help="save both cases' time series as run folders in DIR")
@@ -254,7 +259,7 @@ def _cmd_simulate(args: argparse.Namespace, console: Console) -> int:
     options = StudyOptions(
         record=args.record, records_dir=args.records_dir, pga_g=args.pga, time_scale=args.time_scale,
         duration_s=args.duration, controller=args.controller, rate_hz=args.rate, friction=args.friction,
-        transport_delay_s=args.delay, design_stiffness_scale=args.design_stiffness_scale,
+        transport_delay_s=args.delay, design_stiffness_scale=args.design_stiffness_scale, rig_effects=args.rig_effects,
     )
     with _progress(console, not args.quiet) as progress:
         tasks: dict[str, int] = {}
@@ -281,6 +286,11 @@ def _cmd_simulate(args: argparse.Namespace, console: Console) -> int:
     )
     if result.design_stiffness_scale != 1.0:
         title += f", design stiffness x{result.design_stiffness_scale:g}"
+    if result.rig_effects:
+        title += ", through the rig's sensor, actuator and safety models"
+    twin = result.cases.get("controlled")
+    if twin is not None and twin.extra.get("outcome") == "tripped":
+        console.print(f"[bold red]the controlled case tripped:[/] {escape(twin.extra['trip_reason'])}")
     console.print(peak_table(result.cases["passive"].peaks, controlled.peaks if controlled else None, title))
     cost = sum(case.wall_time_s for case in result.cases.values())
     console.print(f"simulated {len(result.cases)} x {motion.duration_s:.1f} s in {cost:.2f} s of wall time")
@@ -318,7 +328,8 @@ def _cmd_dry_run(args: argparse.Namespace, console: Console) -> int:
     ours, twin = flatten(result.peaks), flatten(result.twin.peaks)
     worst = max(twin, key=lambda k: abs(ours[k] - twin[k]) / abs(twin[k]) if twin[k] else 0.0)
     difference = abs(ours[worst] - twin[worst]) / abs(twin[worst]) * 100 if twin[worst] else 0.0
-    console.print(f"against `harness simulate` with the rig's delays: largest peak difference {difference:.1f} % ({worst})")
+    console.print(f"against `harness simulate --rig-effects` (the rig's models offline): largest peak difference "
+                  f"{difference:.1f} % ({worst})")
     _print_timing(console, session.loop.timing, options.rate_hz or profile.loop.rate_hz)
     _print_outcome(console, session)
     return session.exit_code

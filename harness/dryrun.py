@@ -4,13 +4,13 @@ On python-can's in-process ``virtual`` bus the rig runs in a thread of this proc
 real channel (``socketcan``/``vcan0``) it runs as a separate ``harness rig`` process, which
 this command starts unless ``--external-rig`` says one is already running. Afterwards the
 dry run's peaks are printed beside the simulated passive reference, and compared with
-``harness simulate`` run with the same sensor and actuator delays.
+``harness simulate --rig-effects``: the same rig models (sensors, actuator, safety)
+simulated offline.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import subprocess
 import sys
 import time
@@ -23,10 +23,11 @@ from harness.profile import Profile
 from harness.session import SessionResult, SessionSettings, run_peaks, run_session
 from harness.simulation import CaseResult, SamplingSettings, run_case
 from harness.study import StudyOptions, make_controller, prepare_motion
-from harness.control.estimator import FrictionEstimator
+from harness.twin import run_rig_twin
 
 RIG_START = 1  # RIG_CONTROL command: start table
 RIG_APPEAR_TIMEOUT_S = 60.0
+IN_PROCESS_SWITCH_INTERVAL_S = 2e-4
 LOG_DIR = Path(__file__).resolve().parent.parent / "logs"
 
 
@@ -153,15 +154,18 @@ class RigCoordinator:
         return wait
 
 
-def simulated_twins(profile: Profile, motion, rate_hz: float, controller: str, delay_s: float) -> tuple[CaseResult, CaseResult]:
-    """The passive reference and the controlled twin of a dry run, simulated offline."""
+def simulated_twins(profile: Profile, motion, rate_hz: float, controller: str, lockstep: bool) -> tuple[CaseResult, CaseResult]:
+    """The passive reference and the controlled rig twin of a dry run, simulated offline.
+
+    The twin runs the rig's own sensor, actuator and safety models; a real-time dry run
+    adds on average one period of delay (frames sampled up to a period old, commands
+    applied up to a period late), lockstep none.
+    """
     table = TableMotion.from_motion(motion)
     plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
-    duration = motion.duration_s
-    settings = SamplingSettings(rate_hz, delay_s, "estimator")
-    passive = run_case("passive", plant, duration, settings)
-    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
-    twin = run_case("simulate", plant, duration, settings, make_controller(profile, controller), estimator)
+    passive = run_case("passive", plant, motion.duration_s, SamplingSettings(rate_hz))
+    delay = 0.0 if lockstep else 1.0 / rate_hz
+    twin = run_rig_twin(profile, motion, rate_hz, make_controller(profile, controller), asynchronous_delay_s=delay)
     return passive, twin
 
 
@@ -182,7 +186,11 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
                              "pgd_m": motion.pgd_m, "time_scale": motion.time_scale, "duration_s": motion.duration_s}},
     )
     rig = rig_link = process = None
+    switch_interval = sys.getswitchinterval()
     if can.interface == "virtual":
+        # The rig shares this process: hand the interpreter lock over every 0.2 ms instead
+        # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
+        sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
         rig_link = open_rig(can)
         rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=options.lockstep, can_config=can)
         rig.start_thread()
@@ -196,34 +204,15 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
             on_link=coordinator.on_link, console=console,
         )
     finally:
+        sys.setswitchinterval(switch_interval)
         if rig is not None:
             rig.stop()
             rig_link.close()
         if process is not None:
             _stop_process(process)
     peaks = run_peaks(session.run_path, profile.structure.total_weight_N)
-    delay = rig_delay_s(profile) if rig is not None or process is not None else 0.0
-    passive, twin = simulated_twins(profile, motion, rate_hz, controller, delay)
+    passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep)
     return DryRunResult(session, peaks, passive, twin, motion)
-
-
-def rig_delay_s(profile: Profile) -> float:
-    """The virtual rig's delay from sample to force (s), for the simulated twin.
-
-    Sensor transport delay (the larger of displacement and velocity) plus the actuator's
-    transport delay plus the low-frequency delay of its dynamics (tau for a first-order
-    lag, 2 zeta / omega_n for a second-order one).
-    """
-    rig = profile.rig
-    sensors = max(rig.sensors.displacement.delay_s, rig.sensors.velocity.delay_s)
-    actuator = rig.actuator
-    if actuator.model == "first_order":
-        lag = actuator.time_constant_s
-    elif actuator.model == "second_order":
-        lag = 2.0 * actuator.damping_ratio / (2.0 * math.pi * actuator.bandwidth_hz)
-    else:
-        lag = 0.0
-    return float(sensors + actuator.delay_s + lag)
 
 
 def _stop_process(process: subprocess.Popen) -> None:

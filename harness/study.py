@@ -37,6 +37,7 @@ class StudyOptions:
     friction: str | None = None
     transport_delay_s: float | None = None
     design_stiffness_scale: float | None = None
+    rig_effects: bool = False
 
 
 @dataclass
@@ -48,6 +49,7 @@ class StudyResult:
     controller_name: str
     settings: SamplingSettings
     design_stiffness_scale: float
+    rig_effects: bool = False
     cases: dict[str, CaseResult] = field(default_factory=dict)
 
     def to_json(self) -> dict:
@@ -70,6 +72,7 @@ class StudyResult:
                 "transport_delay_s": self.settings.transport_delay_s,
                 "friction_source": self.settings.friction_source,
                 "design_stiffness_scale": self.design_stiffness_scale,
+                "rig_effects": self.rig_effects,
             },
             "total_weight_N": self.profile.structure.total_weight_N,
             "cases": {"passive": self.cases["passive"].peaks, "controlled": controlled.peaks},
@@ -138,14 +141,20 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
     table = TableMotion.from_motion(motion)
     plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
-    result = StudyResult(profile, motion, name, settings, scale)
+    result = StudyResult(profile, motion, name, settings, scale, options.rig_effects)
     duration = motion.duration_s
 
     def reporter(case: str):
         return None if progress is None else (lambda fraction: progress(case, fraction))
 
     result.cases["passive"] = run_case("passive", plant, duration, settings, progress=reporter("passive"))
-    if controller is not None:
+    if controller is not None and options.rig_effects:
+        from harness.session import build_controller_for_rig
+        from harness.twin import run_rig_twin
+
+        rig_controller = build_controller_for_rig(profile, name)
+        result.cases["controlled"] = run_rig_twin(profile, motion, settings.rate_hz, rig_controller)
+    elif controller is not None:
         estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
         result.cases["controlled"] = run_case(
             "controlled", plant, duration, settings, controller, estimator, progress=reporter("controlled")
