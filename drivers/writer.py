@@ -48,7 +48,8 @@ class TxFrame:
     def __init__(self, codec: MessageCodec):
         self.codec = codec
         self.msg = can.Message(
-            arbitration_id=codec.frame_id, is_extended_id=False, dlc=codec.length, data=bytearray(codec.length)
+            arbitration_id=codec.frame_id, is_extended_id=False, dlc=codec.length, data=bytearray(codec.length),
+            is_rx=False,
         )
         self.counter = 0
         self.sent = 0
@@ -73,6 +74,9 @@ class FrameWriter:
         self.bus = bus
         self.health = health if health is not None else BusHealth()
         self._frames = {name: TxFrame(protocol[name]) for name in names}
+        channel = getattr(bus, "channel_id", getattr(bus, "channel", None))  # virtual: channel_id
+        for tx in self._frames.values():  # logs name the channel the frame went out on
+            tx.msg.channel = channel if isinstance(channel, (str, int)) else None
         #: Called with every frame the bus took, e.g. the run recorder's CAN log;
         #: must copy what it keeps (the frame object is reused for the next send).
         self.tap: Callable[[can.Message], object] | None = None
