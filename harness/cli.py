@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import textwrap
 from collections.abc import Callable, Sequence
@@ -172,6 +173,52 @@ def _add_dry_run(sub) -> None:
     parser.set_defaults(handler=_cmd_dry_run)
 
 
+def _add_rig(sub) -> None:
+    parser = sub.add_parser(
+        "rig",
+        help="serve the virtual rig on a bus (for dry runs across processes)",
+        description=_wrap(
+            "Serve the virtual 4-DOF rig (table, plant on friction bearings, sensors, servo actuator with "
+            "its drive watchdog, fault injection) on a CAN channel until Ctrl-C, in real time or in lockstep "
+            "(one step per actuator command). The harness side is `harness dry-run --external-rig` on the "
+            "same channel. The drive is disabled on the way out."
+        ),
+        epilog="example:\n  harness rig profiles/nceer_4dof.yaml --interface socketcan --channel vcan0\n\n" + EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_profile_options(parser, "profile YAML (default: profiles/nceer_4dof.yaml)")
+    _add_record_options(parser)
+    _add_bus_options(parser)
+    parser.add_argument("--rate", type=float, metavar="HZ", help="the harness's loop rate: the rig's step period is 1/HZ")
+    parser.add_argument("--lockstep", action="store_true", help="advance one step per actuator command")
+    parser.add_argument("--seed", type=int, help="noise seed (default: rig.seed of the profile)")
+    parser.set_defaults(handler=_cmd_rig)
+
+
+def _stop_on_signals() -> None:
+    """Ctrl-C and SIGTERM raise KeyboardInterrupt (a clean stop), even if the shell started
+    this process with SIGINT ignored, as it does for background jobs."""
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, interrupt)
+    signal.signal(signal.SIGTERM, interrupt)
+
+
+def _cmd_rig(args: argparse.Namespace, console: Console) -> int:
+    from harness.rig import run_rig_command
+
+    _stop_on_signals()
+    options = _study_options(args, rate_hz=args.rate)
+    console.print(f"virtual rig on {args.interface or 'the profile interface'}:{args.channel or 'the profile channel'}"
+                  f"{' (lockstep)' if args.lockstep else ''}; Ctrl-C stops it")
+    return run_rig_command(
+        args.profile, interface=args.interface, channel=args.channel, lockstep=args.lockstep, options=options,
+        seed=args.seed, variant=args.variant, overrides=tuple(args.overrides),
+    )
+
+
 def _add_run(sub) -> None:
     parser = sub.add_parser(
         "run",
@@ -236,6 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_dry_run(sub)
+    _add_rig(sub)
     _add_run(sub)
     _add_simulate(sub)
     _add_report(sub)

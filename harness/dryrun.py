@@ -159,13 +159,15 @@ def simulated_twins(profile: Profile, motion, rate_hz: float, controller: str, l
 
     The twin runs the rig's own sensor, actuator and safety models; a real-time dry run
     adds on average one period of delay (frames sampled up to a period old, commands
-    applied up to a period late), lockstep none.
+    applied up to a period late); in lockstep there is none, and sensor delays are
+    rounded to whole steps as the rig does.
     """
     table = TableMotion.from_motion(motion)
     plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
     passive = run_case("passive", plant, motion.duration_s, SamplingSettings(rate_hz))
     delay = 0.0 if lockstep else 1.0 / rate_hz
-    twin = run_rig_twin(profile, motion, rate_hz, make_controller(profile, controller), asynchronous_delay_s=delay)
+    twin = run_rig_twin(profile, motion, rate_hz, make_controller(profile, controller), asynchronous_delay_s=delay,
+                        lockstep=lockstep)
     return passive, twin
 
 

@@ -32,7 +32,7 @@ _MAX_SENSOR_DELAY_S = 1.0
 
 def run_rig_twin(
     profile: Profile, motion, rate_hz: float, controller, seed: int | None = None, asynchronous_delay_s: float = 0.0,
-    story_rate_hz: float | None = None,
+    story_rate_hz: float | None = None, lockstep: bool = False,
 ) -> CaseResult:
     """Simulate the controlled case through the rig's sensor, actuator and safety models.
 
@@ -54,6 +54,8 @@ def run_rig_twin(
         service, up to one period later: on average one period in all. 0 matches lockstep.
     story_rate_hz : float, optional
         Rate of the story sensors (drifts, floor accelerations); default the profile's CAN rate.
+    lockstep : bool
+        Round sensor delays to whole controller steps, as the rig does in lockstep.
 
     Returns
     -------
@@ -72,7 +74,7 @@ def run_rig_twin(
     table = TablePlant(profile.structure, profile.bearing, motion, profile.simulation.rtol)
     rng = np.random.default_rng(rig.seed if seed is None else seed)
     sensors = SensorModel(rig.sensors, h, _MAX_SENSOR_DELAY_S, rng)
-    sensors.set_delays(asynchronous_delay_s, None)
+    sensors.set_delays(asynchronous_delay_s, n_sub if lockstep else None)
     actuator = ServoActuator(rig.actuator, h, rig.drive.decay_time_constant_s)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
     supervisor = Supervisor(profile.safety)

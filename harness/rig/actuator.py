@@ -1,0 +1,116 @@
+"""The servo-hydraulic actuator: transport delay, dynamics, force and rate limits.
+
+Advanced once per physics sub-step ``h``. :meth:`ServoActuator.substep` takes the
+latest commanded force, delays it by whole sub-steps, and returns the force held
+on the plant over the coming sub-step:
+
+- ``ideal``: the delayed command itself;
+- ``first_order``: ``tau dF/dt = F_c - F``, exact over each sub-step (the force held
+  is the state at the sub-step's start);
+- ``second_order``: ``F'' + 2 zeta w F' + w^2 F = w^2 F_c`` (``w = 2 pi bandwidth``),
+  exact zero-order-hold discretization.
+
+Every model then obeys ``|dF/dt| <= force_rate_limit_N_per_s`` and
+``|F| <= force_limit_N``. When the drive is not enabled the force decays to zero
+with ``decay_time_constant_s`` whatever the model.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import expm
+
+from harness.rig.config import ActuatorConfig
+from harness.rig.grid import half_up
+
+
+class ServoActuator:
+    """Actuator force state on the sub-step grid.
+
+    Parameters
+    ----------
+    config : ActuatorConfig
+    substep_s : float
+        Physics sub-step h (s).
+    decay_time_constant_s : float
+        Decay of the force to zero while the drive is not enabled (s).
+    """
+
+    def __init__(self, config: ActuatorConfig, substep_s: float, decay_time_constant_s: float):
+        self.config = config
+        self.substep_s = float(substep_s)
+        self.force_N = 0.0
+        self.rate_N_s = 0.0
+        self._max_step_N = config.force_rate_limit_N_per_s * self.substep_s
+        self._decay = math.exp(-self.substep_s / decay_time_constant_s)
+        self._lag = 1.0 - math.exp(-self.substep_s / config.time_constant_s)
+        w = 2.0 * math.pi * config.bandwidth_hz
+        a = np.array([[0.0, 1.0], [-w * w, -2.0 * config.damping_ratio * w]])
+        phi = expm(a * self.substep_s)
+        gamma = np.linalg.solve(a, (phi - np.eye(2)) @ np.array([0.0, w * w]))
+        self._phi = tuple(float(v) for v in phi.ravel())
+        self._gamma = (float(gamma[0]), float(gamma[1]))
+        self.delay_substeps = half_up(config.delay_s / self.substep_s)
+        self._line = np.zeros(self.delay_substeps + 1)
+        self._head = 0
+
+    def reset(self) -> None:
+        """Zero force, rate and delay line."""
+        self.force_N = 0.0
+        self.rate_N_s = 0.0
+        self._line[:] = 0.0
+        self._head = 0
+
+    def _delayed(self, command_N: float) -> float:
+        line = self._line
+        self._head = (self._head + 1) % line.size
+        line[self._head] = command_N
+        return float(line[(self._head - self.delay_substeps) % line.size])
+
+    def _limit(self, previous: float, target: float) -> float:
+        step = target - previous
+        if step > self._max_step_N:
+            target = previous + self._max_step_N
+        elif step < -self._max_step_N:
+            target = previous - self._max_step_N
+        limit = self.config.force_limit_N
+        return limit if target > limit else -limit if target < -limit else target
+
+    def substep(self, command_N: float, enabled: bool) -> float:
+        """Advance one sub-step; return the force held on the plant over it (N).
+
+        Parameters
+        ----------
+        command_N : float
+            Latest commanded force (N), before the transport delay.
+        enabled : bool
+            The drive is enabled (otherwise the force decays to zero).
+        """
+        command = self._delayed(command_N)
+        previous = self.force_N
+        if not enabled:
+            held = previous
+            self.force_N = previous * self._decay
+            self.rate_N_s = (self.force_N - previous) / self.substep_s
+            return held
+        model = self.config.model
+        if model == "ideal":
+            self.force_N = self._limit(previous, command)
+            self.rate_N_s = 0.0
+            return self.force_N
+        held = previous
+        if model == "first_order":
+            target = previous + (command - previous) * self._lag
+            rate = (target - previous) / self.substep_s
+        else:
+            p00, p01, p10, p11 = self._phi
+            target = p00 * previous + p01 * self.rate_N_s + self._gamma[0] * command
+            rate = p10 * previous + p11 * self.rate_N_s + self._gamma[1] * command
+        limited = self._limit(previous, target)
+        if limited != target:
+            rate = (limited - previous) / self.substep_s
+        self.force_N = limited
+        self.rate_N_s = rate
+        return held

@@ -1,0 +1,114 @@
+"""``harness rig PROFILE``: serve the virtual rig on a CAN bus in the foreground.
+
+The CLI parses the arguments and calls :func:`run_rig_command`; this module does
+the rest: load the profile and record, open the bus (checked by
+:func:`drivers.link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
+event, then stop cleanly: drive disabled and announced, bus shut down.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from drivers.config import CanConfig
+from drivers.link import open_rig
+from harness import exit_codes
+from harness.errors import BusError, HarnessError
+from harness.profile import load_profile
+from harness.rig.virtual_rig import VirtualRig
+from harness.study import StudyOptions, prepare_motion
+
+
+def rig_can_config(profile, interface: str | None = None, channel: str | None = None) -> CanConfig:
+    """The profile's ``can`` section (defaults if it has none) with the command-line overrides."""
+    config = getattr(profile, "can", None) or CanConfig()
+    changes = {key: value for key, value in (("interface", interface), ("channel", channel)) if value}
+    return dataclasses.replace(config, **changes) if changes else config
+
+
+def run_rig_command(
+    profile_path: str | Path | None,
+    *,
+    interface: str | None = None,
+    channel: str | None = None,
+    lockstep: bool = False,
+    options: StudyOptions | None = None,
+    seed: int | None = None,
+    variant: str | None = None,
+    overrides: Sequence[str] = (),
+    stop_event: threading.Event | None = None,
+    clock: Callable[[], float] = time.monotonic,
+    on_ready: Callable[[VirtualRig], None] | None = None,
+) -> int:
+    """Serve the virtual rig until Ctrl-C or ``stop_event``; return an exit status.
+
+    Parameters
+    ----------
+    profile_path : str or Path or None
+        Profile YAML (None: the default profile).
+    interface, channel : str, optional
+        Override the profile's ``can.interface`` / ``can.channel`` (``--interface``, ``--channel``).
+    lockstep : bool
+        ``--lockstep``: start in lockstep and stay there (otherwise the harness may
+        switch it on with RIG_CONTROL lockstep=1).
+    options : StudyOptions, optional
+        Record overrides (``--record``, ``--records-dir``, ``--pga``, ``--time-scale``,
+        ``--duration``); ``rate_hz`` (``--rate``) sets the step period (default: the
+        profile's ``loop.rate_hz``, the harness's tick rate).
+    seed : int, optional
+        ``--seed``: noise seed (default ``rig.seed``).
+    variant : str, optional
+        ``--variant`` of the profile.
+    overrides : sequence of str
+        ``--set KEY.PATH=VALUE`` profile overrides.
+    stop_event : threading.Event, optional
+        Set it to stop (tests, an embedding process); Ctrl-C stops too.
+    clock : callable
+        Wall clock (s).
+    on_ready : callable, optional
+        Called with the running rig once it serves (for a console's status line).
+
+    Returns
+    -------
+    int
+        :data:`harness.exit_codes.OK` after a stop by ``stop_event``,
+        :data:`~harness.exit_codes.STOPPED` after Ctrl-C. Configuration errors
+        (profile, record, bus) raise :class:`~harness.errors.HarnessError` before
+        anything is sent; the CLI maps them to ``INPUT_ERROR``.
+
+    Raises
+    ------
+    BusError
+        The rig stopped serving on its own (the bus failed), after the clean stop.
+    """
+    options = options or StudyOptions()
+    profile = load_profile(profile_path, variant, overrides)
+    motion = prepare_motion(profile, options)
+    can_config = rig_can_config(profile, interface, channel)
+    period = 1.0 / (options.rate_hz or profile.loop.rate_hz)
+    stop = stop_event or threading.Event()
+    with open_rig(can_config) as link:
+        rig = VirtualRig(
+            profile, motion, link, step_period_s=period, lockstep=lockstep or None, seed=seed, clock=clock,
+            can_config=can_config,
+        )
+        status = exit_codes.OK
+        rig.start_thread()
+        try:
+            if on_ready is not None:
+                on_ready(rig)
+            while not stop.wait(0.1) and rig.serving:
+                pass
+        except KeyboardInterrupt:
+            status = exit_codes.STOPPED
+        finally:
+            rig.stop()
+    if isinstance(rig.error, (HarnessError, OSError)):
+        raise BusError(f"the virtual rig stopped serving: {rig.error}") from rig.error
+    if rig.error is not None:
+        raise rig.error
+    return status

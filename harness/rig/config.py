@@ -1,0 +1,121 @@
+"""The ``rig:`` section of a profile: the virtual rig's sensors, actuator, drive and faults.
+
+Every field names its unit. Sensor imperfections are set per signal group
+(displacement, velocity, acceleration); the actuator is ideal, a first-order lag
+or a second-order servo; scheduled faults use the ids of :mod:`harness.rig.faults`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from harness.rig.faults import fault_id_for
+from harness.schema import quantity
+
+FaultKind = Literal[
+    "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
+    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop",
+]
+FaultTarget = Literal["", "TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACTUATOR_STATUS", "RIG_STATUS"]
+
+
+@dataclass(frozen=True)
+class DisplacementSensorConfig:
+    """LVDTs and story-drift sensors: x_0, y_b, drift_1..3."""
+
+    noise_std_m: float = quantity(0.0, unit="m", ge=0.0, doc="Gaussian noise standard deviation")
+    bias_m: float = quantity(0.0, unit="m", doc="constant offset")
+    quantization_m: float = quantity(0.0, unit="m", ge=0.0, doc="quantization step; 0 = none")
+    delay_s: float = quantity(0.0, unit="s", ge=0.0, le=1.0, doc="transport delay")
+
+    def as_tuple(self) -> tuple[float, float, float, float]:
+        """(noise std, bias, quantization step, delay) in SI."""
+        return self.noise_std_m, self.bias_m, self.quantization_m, self.delay_s
+
+
+@dataclass(frozen=True)
+class VelocitySensorConfig:
+    """Velocity transducers: xdot_0, ydot_b."""
+
+    noise_std_m_s: float = quantity(0.0, unit="m/s", ge=0.0, doc="Gaussian noise standard deviation")
+    bias_m_s: float = quantity(0.0, unit="m/s", doc="constant offset")
+    quantization_m_s: float = quantity(0.0, unit="m/s", ge=0.0, doc="quantization step; 0 = none")
+    delay_s: float = quantity(0.0, unit="s", ge=0.0, le=1.0, doc="transport delay")
+
+    def as_tuple(self) -> tuple[float, float, float, float]:
+        """(noise std, bias, quantization step, delay) in SI."""
+        return self.noise_std_m_s, self.bias_m_s, self.quantization_m_s, self.delay_s
+
+
+@dataclass(frozen=True)
+class AccelerationSensorConfig:
+    """Accelerometers: xddot_0, yddot_b, floor accelerations 1..3."""
+
+    noise_std_m_s2: float = quantity(0.0, unit="m/s^2", ge=0.0, doc="Gaussian noise standard deviation")
+    bias_m_s2: float = quantity(0.0, unit="m/s^2", doc="constant offset")
+    quantization_m_s2: float = quantity(0.0, unit="m/s^2", ge=0.0, doc="quantization step; 0 = none")
+    delay_s: float = quantity(0.0, unit="s", ge=0.0, le=1.0, doc="transport delay")
+
+    def as_tuple(self) -> tuple[float, float, float, float]:
+        """(noise std, bias, quantization step, delay) in SI."""
+        return self.noise_std_m_s2, self.bias_m_s2, self.quantization_m_s2, self.delay_s
+
+
+@dataclass(frozen=True)
+class SensorsConfig:
+    """The three sensor groups."""
+
+    displacement: DisplacementSensorConfig = field(default_factory=DisplacementSensorConfig)
+    velocity: VelocitySensorConfig = field(default_factory=VelocitySensorConfig)
+    acceleration: AccelerationSensorConfig = field(default_factory=AccelerationSensorConfig)
+
+
+@dataclass(frozen=True)
+class ActuatorConfig:
+    """The servo-hydraulic actuator between table and base mat."""
+
+    model: Literal["ideal", "first_order", "second_order"] = quantity("first_order", doc="servo dynamics")
+    time_constant_s: float = quantity(0.01, unit="s", gt=0.0, doc="first-order lag time constant")
+    bandwidth_hz: float = quantity(30.0, unit="Hz", gt=0.0, doc="second-order natural frequency")
+    damping_ratio: float = quantity(0.7, gt=0.0, le=2.0, doc="second-order damping ratio")
+    delay_s: float = quantity(0.0, unit="s", ge=0.0, le=1.0, doc="command transport delay")
+    force_limit_N: float = quantity(20_000.0, unit="N", gt=0.0, le=30_000.0, doc="largest |force| the actuator delivers")
+    force_rate_limit_N_per_s: float = quantity(1.0e6, unit="N/s", gt=0.0, doc="largest |dF/dt|")
+    force_noise_N: float = quantity(0.0, unit="N", ge=0.0, doc="load-cell noise std in ACTUATOR_STATUS")
+
+
+@dataclass(frozen=True)
+class DriveConfig:
+    """Drive-side enable logic and watchdog (wall clock)."""
+
+    watchdog_timeout_s: float = quantity(0.05, unit="s", gt=0.0, doc="commands/heartbeats older than this trip the drive")
+    decay_time_constant_s: float = quantity(0.02, unit="s", gt=0.0, doc="force decay to zero when the drive is not enabled")
+
+
+@dataclass(frozen=True)
+class FaultSpec:
+    """One scheduled fault; times are record time (from table start), see :mod:`harness.rig.faults`."""
+
+    kind: FaultKind = quantity(doc="fault kind")
+    target: FaultTarget = quantity("", doc="message the fault acts on (message faults only)")
+    start_s: float = quantity(0.0, unit="s", ge=0.0, doc="onset, record time")
+    duration_s: float = quantity(0.0, unit="s", ge=0.0, doc="length; 0 = until reset")
+    param: float = quantity(0.0, doc="parameter in the SI unit the kind defines")
+
+    def __post_init__(self) -> None:
+        fault_id_for(self.kind, self.target)  # a target where one belongs, none elsewhere
+
+
+@dataclass(frozen=True)
+class RigConfig:
+    """The virtual rig (profile section ``rig``)."""
+
+    physics_substep_s: float = quantity(0.0005, unit="s", gt=0.0, le=0.01, doc="actuator/plant sub-step; divides the step period")
+    seed: int = quantity(0, ge=0, doc="seed of every random draw (noise)")
+    lockstep: bool = field(default=False, metadata={"doc": "start in lockstep mode"})
+    history_s: float = quantity(60.0, unit="s", ge=0.0, le=3600.0, doc="length of the exact history ring")
+    sensors: SensorsConfig = field(default_factory=SensorsConfig)
+    actuator: ActuatorConfig = field(default_factory=ActuatorConfig)
+    drive: DriveConfig = field(default_factory=DriveConfig)
+    faults: tuple[FaultSpec, ...] = quantity((), doc="scheduled faults")

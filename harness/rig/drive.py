@@ -1,0 +1,106 @@
+"""Drive enable logic and the drive-side watchdog of the servo controller.
+
+States (ACTUATOR_STATUS ``drive_state``): 0 OFF, 1 READY, 2 ENABLED, 3 FAULT, 4 ESTOP.
+
+- OFF -> READY when heartbeats arrive (the latest younger than the watchdog
+  timeout) and the hydraulic pressure is ok.
+- READY -> ENABLED on a command frame with ``enable = 1``; ENABLED -> READY on one
+  with ``enable = 0``.
+- READY or ENABLED -> FAULT (latched) when the heartbeat stops (code 2), when
+  ENABLED and the commands stop (code 1) for longer than the timeout, when the
+  pressure is lost (code 3), or on an injected drive fault (code from the fault,
+  default 4).
+- any -> ESTOP (latched, code 5) on an E-stop.
+- FAULT and ESTOP clear only on :meth:`Drive.reset` (RIG_CONTROL reset), back to OFF.
+
+Ages are measured on the wall clock the caller passes in (``now``), in lockstep too.
+"""
+
+from __future__ import annotations
+
+import math
+
+OFF, READY, ENABLED, FAULT, ESTOP = 0, 1, 2, 3, 4
+FAULT_NONE, FAULT_COMMAND_WATCHDOG, FAULT_HEARTBEAT_WATCHDOG, FAULT_PRESSURE, FAULT_INJECTED, FAULT_ESTOP = 0, 1, 2, 3, 4, 5
+
+
+class Drive:
+    """The servo controller's enable state machine.
+
+    Parameters
+    ----------
+    watchdog_timeout_s : float
+        Largest age of the latest command (when enabled) and heartbeat (s).
+    """
+
+    def __init__(self, watchdog_timeout_s: float):
+        self.timeout_s = float(watchdog_timeout_s)
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to OFF with no fault; forget command and heartbeat times."""
+        self.state = OFF
+        self.fault_code = FAULT_NONE
+        self.enable_requested = False
+        self.command_N = 0.0
+        self.last_command_time = -math.inf
+        self.last_heartbeat_time = -math.inf
+
+    @property
+    def enabled(self) -> bool:
+        """True when the drive applies force."""
+        return self.state == ENABLED
+
+    def _trip(self, state: int, code: int) -> None:
+        self.state = state
+        self.fault_code = code
+        self.enable_requested = False
+
+    def on_heartbeat(self, now: float) -> None:
+        """A heartbeat frame arrived at ``now`` (s, wall clock)."""
+        self.last_heartbeat_time = now
+
+    def on_command(self, enable: bool, force_N: float, now: float) -> None:
+        """A command frame arrived at ``now``: record it and apply the enable bit."""
+        self.last_command_time = now
+        self.enable_requested = bool(enable)
+        self.command_N = float(force_N)
+        if self.state == READY and enable:
+            self.state = ENABLED
+        elif self.state == ENABLED and not enable:
+            self.state = READY
+
+    def on_estop(self) -> None:
+        """An E-stop (frame or rig fault): latch ESTOP."""
+        if self.state != ESTOP:
+            self._trip(ESTOP, FAULT_ESTOP)
+
+    def update(self, now: float, pressure_ok: bool, injected_code: int = 0) -> int:
+        """Run the watchdog and transitions at ``now`` (s); return the state.
+
+        Parameters
+        ----------
+        now : float
+            Wall-clock time (s), same clock as the frame times.
+        pressure_ok : bool
+            Hydraulic pressure present.
+        injected_code : int
+            Non-zero: an injected drive fault with this code.
+        """
+        if self.state in (FAULT, ESTOP):
+            return self.state
+        heartbeat_ok = now - self.last_heartbeat_time <= self.timeout_s
+        if self.state == OFF:
+            if heartbeat_ok and pressure_ok and not injected_code:
+                self.state = READY
+            else:
+                return self.state
+        if injected_code:
+            self._trip(FAULT, injected_code)
+        elif not pressure_ok:
+            self._trip(FAULT, FAULT_PRESSURE)
+        elif not heartbeat_ok:
+            self._trip(FAULT, FAULT_HEARTBEAT_WATCHDOG)
+        elif self.state == ENABLED and now - self.last_command_time > self.timeout_s:
+            self._trip(FAULT, FAULT_COMMAND_WATCHDOG)
+        return self.state

@@ -1,0 +1,93 @@
+"""The rig's receive side: one frame at a time, so every command frame is one event.
+
+:class:`~drivers.reader.RigReader` keeps only the latest sample of each message,
+which is right for a control loop but loses events for the rig: in lockstep every
+ACTUATOR_CMD frame is a step, and two RIG_CONTROL frames in one poll are two
+commands. :class:`RigInbox` therefore takes frames off the bus one by one (blocking
+up to a timeout when asked, so the lockstep thread does not spin) and checks and
+decodes each with the drivers' :class:`~drivers.decoder.Decoder` (same E2E checks
+and counts). A damaged frame on the E-stop ID counts as a stop request, as in the
+drivers' reader.
+"""
+
+from __future__ import annotations
+
+import can
+
+from drivers.codec import Protocol
+from drivers.decoder import Decoder, RxStatus
+from drivers.reader import RIG_RX
+from harness.errors import BusError
+
+NOTHING, COMMAND, HEARTBEAT, CONTROL, ESTOP, REJECTED, OTHER = 0, 1, 2, 3, 4, 5, 6
+
+
+class RigInbox:
+    """Receives and decodes the harness's frames for the rig.
+
+    Parameters
+    ----------
+    bus : can.BusABC
+    protocol : Protocol
+
+    Attributes
+    ----------
+    command, heartbeat, control, estop : list of float
+        Latest accepted values (DBC order, SI), updated in place.
+    frames : int
+        Frames taken off the bus.
+    """
+
+    def __init__(self, bus: can.BusABC, protocol: Protocol):
+        self.bus = bus
+        self.decoder = Decoder(protocol, RIG_RX)
+        self.command = self.decoder.values("ACTUATOR_CMD")
+        self.heartbeat = self.decoder.values("HEARTBEAT")
+        self.control = self.decoder.values("RIG_CONTROL")
+        self.estop = self.decoder.values("ESTOP")
+        self._kinds = {
+            protocol["ACTUATOR_CMD"].frame_id: COMMAND,
+            protocol["HEARTBEAT"].frame_id: HEARTBEAT,
+            protocol["RIG_CONTROL"].frame_id: CONTROL,
+            protocol["ESTOP"].frame_id: ESTOP,
+        }
+        self._estop_id = protocol["ESTOP"].frame_id
+        self._estop_active = protocol["ESTOP"].index("active")
+        self.frames = 0
+
+    def receive(self, timeout_s: float = 0.0) -> int:
+        """Take one frame (waiting up to ``timeout_s``) and return what it was.
+
+        Returns
+        -------
+        int
+            NOTHING (no frame), COMMAND, HEARTBEAT, CONTROL (values updated), ESTOP
+            (a valid active stop or a damaged frame on the E-stop ID), REJECTED
+            (failed a check, counted by the decoder) or OTHER (an inactive E-stop,
+            an error frame, a foreign ID).
+
+        Raises
+        ------
+        BusError
+            The bus failed (closed, interface gone).
+        """
+        try:
+            msg = self.bus.recv(timeout=timeout_s)
+        except (can.CanError, OSError, ValueError) as err:
+            raise BusError(f"the virtual rig could not receive from the CAN bus: {err}") from err
+        if msg is None:
+            return NOTHING
+        self.frames += 1
+        if msg.is_error_frame:
+            return OTHER
+        status = self.decoder.decode(
+            msg.arbitration_id, msg.data, is_data_frame=not (msg.is_remote_frame or msg.is_fd), extended=msg.is_extended_id
+        )
+        kind = OTHER if msg.is_extended_id else self._kinds.get(msg.arbitration_id, OTHER)
+        if kind == ESTOP:
+            if status == RxStatus.OK:
+                return ESTOP if self.estop[self._estop_active] else OTHER
+            return ESTOP if status in (RxStatus.WRONG_LENGTH, RxStatus.BAD_CRC, RxStatus.NOT_DATA) else REJECTED
+        if status != RxStatus.OK:
+            return REJECTED if kind != OTHER else OTHER
+        return kind

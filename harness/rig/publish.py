@@ -1,0 +1,115 @@
+"""Sending the rig's frames, with the frame- and value-level faults applied.
+
+Every frame the rig sends goes through :meth:`RigPublisher.send`, which honours bus
+silence, dropout, corrupted CRC and repeated/skipped rolling counters
+(:mod:`harness.rig.faults`). Sensor messages go through :meth:`RigPublisher.sensor`
+first, which applies stuck values, spikes and noise bursts and saturates every
+value at its DBC range (a real transducer saturates; the codec would refuse it).
+Frames are the writer's preallocated :class:`~drivers.writer.TxFrame` objects.
+"""
+
+from __future__ import annotations
+
+import can
+
+from drivers.e2e import COUNTER_MODULO
+from drivers.writer import RigWriter, TxFrame
+from harness.rig import faults as F
+from harness.rig.faults import TARGETS, FaultSet
+from harness.rig.sensors import MESSAGE_COLUMNS, SensorModel
+
+
+class RigPublisher:
+    """Encodes and sends the rig's messages through ``writer``'s frames.
+
+    Parameters
+    ----------
+    writer : RigWriter
+    faults : FaultSet
+    sensors : SensorModel
+    """
+
+    def __init__(self, writer: RigWriter, faults: FaultSet, sensors: SensorModel):
+        self.writer = writer
+        self.faults = faults
+        self.sensors = sensors
+        self.frames: tuple[TxFrame, ...] = tuple(writer.frame(name) for name in TARGETS)
+        self._estop = writer.frame("ESTOP")
+        self._ranges = tuple(tuple((s.minimum, s.maximum) for s in tx.codec.signals) for tx in self.frames)
+        self._values = tuple([0.0] * len(tx.codec.signals) for tx in self.frames)
+        self._estop_values = [1.0, 1.0, 0.0]
+        self.sent = [0] * len(TARGETS)
+        self.suppressed = 0
+
+    def _clip(self, target: int) -> None:
+        values = self._values[target]
+        for i, (lo, hi) in enumerate(self._ranges[target]):
+            value = values[i]
+            values[i] = lo if value < lo else hi if value > hi else value
+
+    def sensor(self, target: int, now: float) -> bool:
+        """Measure and send sensor message ``target`` (0..3); False if nothing went out."""
+        faults = self.faults
+        values = self._values[target]
+        if faults.is_on(F.STUCK, target):
+            return self.send(target, values, now)  # the values last sent, again
+        burst = faults.param[F.NOISE_BURST, target] if faults.is_on(F.NOISE_BURST, target) else 0.0
+        self.sensors.read(MESSAGE_COLUMNS[target], values, abs(burst))
+        values[0] += faults.take_spike(target)
+        self._clip(target)
+        return self.send(target, values, now)
+
+    def status(self, force_N: float, drive_state: int, pressure_ok: bool, fault_code: int, now: float) -> bool:
+        """Send ACTUATOR_STATUS (target 4)."""
+        values = self._values[4]
+        values[0], values[1], values[2], values[3] = drive_state, (1.0 if pressure_ok else 0.0), fault_code, force_N
+        self._clip(4)
+        return self.send(4, values, now)
+
+    def rig_status(self, running: bool, lockstep: bool, fault_active: bool, record_time_s: float, step: int, now: float) -> bool:
+        """Send RIG_STATUS (target 5); ``step`` is sent modulo 2**24."""
+        values = self._values[5]
+        values[0], values[1], values[2] = (1.0 if running else 0.0), (1.0 if lockstep else 0.0), (1.0 if fault_active else 0.0)
+        values[3], values[4] = record_time_s, step % (1 << 24)
+        self._clip(5)
+        return self.send(5, values, now)
+
+    def estop(self, now: float) -> bool:
+        """Send an active ESTOP from the rig (source 1)."""
+        if self.faults.is_on(F.BUS_SILENCE):
+            self.suppressed += 1
+            return False
+        return self.writer.send_frame(self._estop, self._estop_values, now)
+
+    def send(self, target: int, values: list[float], now: float) -> bool:
+        """Send message ``target`` with ``values``, applying the frame-level faults."""
+        faults = self.faults
+        if faults.is_on(F.BUS_SILENCE) or faults.is_on(F.DROPOUT, target):
+            self.suppressed += 1
+            return False
+        tx = self.frames[target]
+        if faults.is_on(F.REPEAT_COUNTER, target) and tx.sent:
+            tx.counter = (tx.counter - 1) % COUNTER_MODULO
+        elif faults.is_on(F.SKIP_COUNTER, target):
+            tx.counter = (tx.counter + 1) % COUNTER_MODULO
+        if faults.is_on(F.CORRUPT_CRC, target):
+            ok = self._send_corrupted(tx, values, now)
+        else:
+            ok = self.writer.send_frame(tx, values, now)
+        if ok:
+            self.sent[target] += 1
+        return ok
+
+    def _send_corrupted(self, tx: TxFrame, values: list[float], now: float) -> bool:
+        msg = tx.msg
+        tx.codec.encode_into(msg.data, values, tx.counter)
+        msg.data[0] ^= 0xA5
+        msg.timestamp = now
+        try:
+            self.writer.bus.send(msg, timeout=0)
+        except (can.CanError, OSError, ValueError) as err:
+            self.writer.health.note_send_failure(err, now)
+            return False
+        tx.counter = (tx.counter + 1) % COUNTER_MODULO
+        tx.sent += 1
+        return True

@@ -1,0 +1,52 @@
+"""The rig's service loop: wall-clock ticks in real time, frame-driven in lockstep.
+
+Real time: a :class:`~harness.loop.scheduler.FixedRateScheduler` wakes the rig at
+the sensor rate against absolute deadlines, without the busy-wait spin (the rig
+shares two cores with the harness loop; a tick's lateness only delays frames, the
+physics stays on the sub-step grid). Lockstep: the loop blocks on the bus for up
+to ``poll_timeout_s``, so it steps as soon as a command arrives and still runs the
+drive watchdog every ``poll_timeout_s`` when commands stop. The mode may change at
+any time through RIG_CONTROL; the loop follows. An exception ends the loop and is
+kept in ``rig.error`` for the owner (a thread cannot raise to it).
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+
+from harness.loop.scheduler import FixedRateScheduler
+
+
+def serve(rig, stop: threading.Event, poll_timeout_s: float = 0.002, sleep: Callable[[float], None] | None = None) -> None:
+    """Serve ``rig`` (a :class:`~harness.rig.virtual_rig.VirtualRig`) until ``stop`` is set.
+
+    Parameters
+    ----------
+    rig : VirtualRig
+    stop : threading.Event
+    poll_timeout_s : float
+        Longest blocking wait for a frame in lockstep (s).
+    sleep : callable, optional
+        Sleep function of the real-time scheduler (default ``time.sleep``).
+    """
+    try:
+        _loop(rig, stop, poll_timeout_s, sleep)
+    except Exception as err:  # noqa: BLE001 - a thread cannot raise to its owner: keep it for VirtualRig.error
+        rig.error = err
+
+
+def _loop(rig, stop: threading.Event, poll_timeout_s: float, sleep: Callable[[float], None] | None) -> None:
+    kwargs = {"sleep": sleep} if sleep is not None else {}
+    scheduler = FixedRateScheduler(rig.schedule.sensor_period_s, spin_s=0.0, clock=rig.clock, **kwargs)
+    started = False
+    while not stop.is_set():
+        if rig.lockstep:
+            started = False
+            rig.service(rig.clock(), wait_s=poll_timeout_s)
+            continue
+        if not started:
+            scheduler.start()
+            started = True
+        scheduler.wait()
+        rig.service(rig.clock())

@@ -1,0 +1,395 @@
+"""The virtual rig: table, plant, sensors, actuator and drive served on the CAN bus.
+
+Two ways to run (see :mod:`harness.rig` for the lockstep contract):
+
+- real time: :meth:`VirtualRig.service` (called by the runner at the sensor rate
+  with the wall clock) handles every waiting frame, advances the plant from its
+  last time to ``now`` in physics sub-steps and publishes whatever is due;
+- lockstep: each ACTUATOR_CMD frame is applied and advances the rig exactly one
+  step period, after which the rig publishes TABLE_SENSORS, BASE_SENSORS,
+  (STORY_DRIFTS, FLOOR_ACCELS every k-th step), ACTUATOR_STATUS and, last,
+  RIG_STATUS with ``step_index`` = steps taken.
+
+Time: the rig's own time is an integer count of sub-steps; ``now`` (wall clock,
+passed in) is used only for the drive watchdog, frame timestamps and, in real
+time, to know how far to advance.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+
+from typing import TYPE_CHECKING
+
+import can
+import numpy as np
+
+from drivers.codec import load_protocol
+from drivers.config import CanConfig
+from drivers.writer import RigWriter
+from harness.errors import ModelError
+from harness.rig import drive as D
+from harness.rig import faults as F
+from harness.rig import inbox as rx
+from harness.rig.actuator import ServoActuator
+from harness.rig.drive import Drive
+from harness.rig.faults import FaultSet, schedule_from
+from harness.rig.history import History, record_columns
+from harness.rig.inbox import RigInbox
+from harness.rig.parts import RigParts, RigState
+from harness.rig.publish import RigPublisher
+from harness.rig.runner import serve
+from harness.rig.schedule import PublishSchedule
+from harness.rig.sensors import SIGNALS, SensorModel
+from harness.rig.table import TablePlant
+
+if TYPE_CHECKING:
+    from drivers.link import RigLink
+    from harness.profile import Profile
+    from harness.records import GroundMotion
+
+START_TABLE, STOP_TABLE, RESET = 1, 2, 3
+
+
+class VirtualRig:
+    """The 4-DOF rig on a CAN bus.
+
+    Parameters
+    ----------
+    parts : RigParts or Profile
+    motion : GroundMotion
+        The processed record the table plays.
+    bus_or_link : can.BusABC or RigLink
+        An open bus (the rig builds its writer), or a link from
+        :func:`drivers.link.open_rig` (its writer is used; frames are received by
+        the rig's own :class:`~harness.rig.inbox.RigInbox` on ``link.bus``).
+    step_period_s : float
+        The harness's control period (s); a whole multiple of the physics sub-step.
+    lockstep : bool, optional
+        Start in lockstep and stay there (RIG_CONTROL lockstep=0 does not leave it);
+        default ``rig.lockstep`` of the profile.
+    seed : int, optional
+        Noise seed; default ``rig.seed``.
+    clock : callable
+        Wall clock (s) for the runner thread.
+    can_config : CanConfig, optional
+        Message rates (real time); defaults of :class:`~drivers.config.CanConfig`.
+    """
+
+    def __init__(
+        self,
+        parts: RigParts | Profile,
+        motion: GroundMotion,
+        bus_or_link: can.BusABC | RigLink,
+        *,
+        step_period_s: float,
+        lockstep: bool | None = None,
+        seed: int | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        can_config: CanConfig | None = None,
+    ):
+        parts = parts if isinstance(parts, RigParts) else RigParts.from_profile(parts)
+        if parts.building.n_stories != 3:
+            raise ModelError(f"the rig protocol carries 3 stories; the building has {parts.building.n_stories}")
+        self.config = cfg = parts.rig
+        self.h = cfg.physics_substep_s
+        self.n_sub = int(round(step_period_s / self.h))
+        if self.n_sub < 1 or abs(self.n_sub * self.h - step_period_s) > 1e-9 * step_period_s:
+            raise ModelError(f"step period {step_period_s} s is not a whole multiple of the physics sub-step {self.h} s")
+        self.step_period_s = float(step_period_s)
+        self.clock = clock
+        if isinstance(bus_or_link, can.BusABC):
+            self.bus, protocol = bus_or_link, load_protocol()
+            writer = RigWriter(self.bus, protocol)
+        else:
+            self.bus, protocol, writer = bus_or_link.bus, bus_or_link.protocol, bus_or_link.writer
+        seeds = np.random.SeedSequence(cfg.seed if seed is None else seed).spawn(2)
+        self._force_rng = np.random.default_rng(seeds[1])
+        self.table = TablePlant(parts.building, parts.bearing, motion, parts.rtol)
+        self.sensors = SensorModel(cfg.sensors, self.h, 3.0 + F.MAX_EXTRA_DELAY_S, np.random.default_rng(seeds[0]))
+        self.actuator = ServoActuator(cfg.actuator, self.h, cfg.drive.decay_time_constant_s)
+        self.drive = Drive(cfg.drive.watchdog_timeout_s)
+        self.faults = FaultSet(schedule_from(cfg.faults))
+        self.publisher = RigPublisher(writer, self.faults, self.sensors)
+        self.inbox = RigInbox(self.bus, protocol)
+        self.history = History(int(math.ceil(cfg.history_s / self.h)), self.table.y.size)
+        self.schedule = PublishSchedule(can_config or CanConfig(), self.h, self.step_period_s)
+        self.pinned_lockstep = bool(cfg.lockstep if lockstep is None else lockstep)
+        self.lockstep = self.pinned_lockstep
+        self._truth = np.zeros(len(SIGNALS))
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        self._stop_event = threading.Event()
+        self.error: BaseException | None = None
+        self._reset_rig()
+
+    # ----------------------------------------------------------------- state
+    def _reset_rig(self) -> None:
+        self.table.reset()
+        self.actuator.reset()
+        self.drive.reset()
+        self.history.clear()
+        self.faults.reset_schedule()
+        self.n = 0
+        self.step_index = 0
+        self.armed = False
+        self.force_N = 0.0
+        self._t0: float | None = None
+        self._announce = self.lockstep
+        self._last_drive_state = D.OFF
+        self._last_status_time = -math.inf
+        self.table.truth(self._truth, 0.0)
+        self.sensors.reset(self._truth)
+        self._update_faults()
+        self.schedule.reset(0)
+
+    @property
+    def rig_time_s(self) -> float:
+        """Rig time (s): sub-steps taken times the sub-step."""
+        return self.n * self.h
+
+    @property
+    def state(self) -> RigState:
+        """A snapshot (see :class:`RigState`)."""
+        return RigState(
+            self.drive.state, self.drive.fault_code, self.pressure_ok, self.actuator.force_N, self.drive.command_N,
+            self.rig_time_s, self.table.record_time_s, self.step_index, self.table.running, self.lockstep,
+            self.faults.active_ids(), self.inbox.frames,
+        )
+
+    @property
+    def pressure_ok(self) -> bool:
+        """Hydraulic pressure present (no pressure-lost fault)."""
+        return not self.faults.is_on(F.PRESSURE_LOST)
+
+    def _update_faults(self) -> None:
+        self.faults.update(self.table.record_time_s if self.table.started else None)
+        self.sensors.set_delays(self.faults.extra_delay_s, self.n_sub if self.lockstep else None)
+
+    def _update_drive(self, now: float) -> None:
+        faults = self.faults
+        if faults.is_on(F.ESTOP):
+            self.drive.on_estop()
+        code = 0
+        if faults.is_on(F.DRIVE_FAULT):
+            code = int(min(max(faults.param[F.DRIVE_FAULT, 0], 0.0), 255.0)) or D.FAULT_INJECTED
+        self.drive.update(now, self.pressure_ok, code)
+
+    # --------------------------------------------------------------- physics
+    def _substep(self) -> None:
+        enabled = self.drive.enabled
+        force = self.actuator.substep(self.drive.command_N, enabled)
+        table = self.table
+        t = self.n * self.h
+        self.history.append(t, table.record_time_s if table.running else None, force, table.y)
+        table.advance(t, self.h, force)
+        self.n += 1
+        self.force_N = force
+        table.truth(self._truth, force)
+        self.sensors.push(self._truth)
+
+    def _step(self, now: float) -> None:
+        if self.armed:
+            self.armed = False
+            self.table.start()
+            self.faults.reset_schedule()
+        for _ in range(self.n_sub):
+            self._substep()
+        self.step_index += 1
+        self._update_faults()
+        self._update_drive(now)
+        self._publish_lockstep(now)
+
+    # ------------------------------------------------------------ publishing
+    def _publish_lockstep(self, now: float) -> None:
+        self._announce = False
+        self._last_status_time = now
+        pub = self.publisher
+        pub.sensor(0, now)
+        pub.sensor(1, now)
+        if self.step_index % self.schedule.story_every_steps == 0:
+            pub.sensor(2, now)
+            pub.sensor(3, now)
+        self._publish_status(now)
+        if self.faults.is_on(F.ESTOP):
+            pub.estop(now)
+        self._publish_rig_status(now)
+        self._last_drive_state = self.drive.state
+
+    def _publish_status(self, now: float) -> None:
+        noise = self.config.actuator.force_noise_N
+        measured = self.actuator.force_N + (noise * float(self._force_rng.standard_normal()) if noise > 0 else 0.0)
+        self.publisher.status(measured, self.drive.state, self.pressure_ok, self.drive.fault_code, now)
+
+    def _publish_rig_status(self, now: float) -> None:
+        table = self.table
+        self.publisher.rig_status(
+            table.running, self.lockstep, self.faults.any_active, min(table.record_time_s, 1677.0), self.step_index, now
+        )
+
+    def _publish_due(self, now: float) -> None:
+        due = self.schedule.due(self.n)
+        pub = self.publisher
+        if due.sensors:
+            pub.sensor(0, now)
+            pub.sensor(1, now)
+        if due.stories:
+            pub.sensor(2, now)
+            pub.sensor(3, now)
+        if due.status:
+            self._publish_status(now)
+            if self.faults.is_on(F.ESTOP):
+                pub.estop(now)
+        if due.rig_status:
+            self._publish_rig_status(now)
+
+    # ---------------------------------------------------------------- frames
+    def _on_control(self, now: float) -> None:
+        command, lockstep, fault_id, fault_param = self.inbox.control
+        self.faults.inject(int(fault_id), float(fault_param))
+        if bool(lockstep) != self.lockstep and not (self.pinned_lockstep and not lockstep):
+            self.lockstep = bool(lockstep)
+            self.step_index = 0
+            self._t0 = None
+        command = int(command)
+        if command == RESET:
+            self._reset_rig()
+        elif command == START_TABLE and not self.table.running and not self.armed:
+            if self.lockstep:
+                self.armed = True
+            else:
+                self.table.start()
+                self.faults.reset_schedule()
+        elif command == STOP_TABLE:
+            self.armed = False
+            self.table.stop()
+        self._update_faults()
+        self._update_drive(now)
+        if self.lockstep:  # entering lockstep, or a command in it: the harness sees the effect
+            self._publish_lockstep(now)
+
+    def _handle(self, kind: int, now: float) -> None:
+        if kind == rx.COMMAND:
+            self._update_drive(now)
+            enable, force = self.inbox.command
+            self.drive.on_command(bool(enable), force, now)
+            if self.lockstep:
+                self._step(now)
+        elif kind == rx.HEARTBEAT:
+            self.drive.on_heartbeat(now)
+            self._update_drive(now)
+        elif kind == rx.CONTROL:
+            self._on_control(now)
+        elif kind == rx.ESTOP:
+            self.drive.on_estop()
+
+    def _after_frames(self, now: float) -> None:
+        self._update_faults()
+        self._update_drive(now)
+        if self._announce and self.lockstep:
+            self._announce = False
+            self._publish_lockstep(now)
+        if self.lockstep and self.drive.state != self._last_drive_state:
+            self._publish_status(now)  # a watchdog trip between steps is announced at once
+            self._last_drive_state = self.drive.state
+        if self.lockstep and now - self._last_status_time >= self.schedule.rig_status_period_s:
+            self._last_status_time = now  # idle beacon: a harness that joins late still finds the rig
+            self._publish_rig_status(now)
+
+    def service(self, now: float, wait_s: float = 0.0) -> int:
+        """In real time, advance to ``now`` and publish what is due; then handle the waiting frames.
+
+        Real time advances first, so a frame received now acts from now on (never
+        on the interval before it arrived). In lockstep the frames drive the steps.
+
+        Parameters
+        ----------
+        now : float
+            Wall-clock time (s), from the same clock as every other ``now``.
+        wait_s : float
+            Wait up to this long for the first frame (the lockstep thread's poll
+            timeout); the frames are then handled at ``clock()``.
+
+        Returns
+        -------
+        int
+            Frames handled.
+        """
+        with self._lock:
+            if not self.lockstep:
+                self._update_drive(now)
+                self._advance_to(now)
+            handled = 0
+            kind = self.inbox.receive(wait_s)
+            while kind != rx.NOTHING:
+                handled += 1
+                self._handle(kind, now if wait_s == 0.0 else self.clock())
+                kind = self.inbox.receive(0.0)
+            if wait_s:
+                now = self.clock()
+            self._after_frames(now)
+            return handled
+
+    def _advance_to(self, now: float) -> None:
+        """Sub-steps up to ``now``, then what is due, once (after a stall: no burst of old values)."""
+        if self._t0 is None:
+            self._t0 = now - self.n * self.h
+        target = int((now - self._t0) / self.h + 1e-9)
+        if target - self.n > self.schedule.max_catch_up:
+            self.schedule.late_services += 1
+        while self.n < target:
+            self._substep()
+        if self.schedule.any_due(self.n):
+            self._update_faults()
+            self._publish_due(now)
+
+    def step_lockstep(self, force_N: float, enable: bool, now: float) -> None:
+        """Apply one command and advance one step, as an ACTUATOR_CMD frame would (in-process)."""
+        with self._lock:
+            self._update_drive(now)
+            self.drive.on_command(enable, force_N, now)
+            self._step(now)
+
+    def announce(self, now: float) -> None:
+        """Publish the lockstep set for the current step (what entering lockstep sends)."""
+        with self._lock:
+            self._publish_lockstep(now)
+
+    def record_columns(self) -> dict[str, np.ndarray]:
+        """Canonical run columns of the record run from the exact history (see :func:`.history.record_columns`)."""
+        return record_columns(self.history, self.table.record, self.step_period_s)
+
+    # --------------------------------------------------------------- thread
+    def start_thread(self, poll_timeout_s: float = 0.002, sleep: Callable[[float], None] = time.sleep) -> None:
+        """Serve the bus in a daemon thread (real time or lockstep, as commanded).
+
+        If the loop fails (e.g. the bus goes away) the thread ends and keeps the
+        exception in :attr:`error`; :attr:`serving` turns False.
+        """
+        if self._thread is not None:
+            return
+        self._stop_event.clear()
+        self._thread = threading.Thread(
+            target=serve, args=(self, self._stop_event, poll_timeout_s, sleep), name="virtual-rig", daemon=True
+        )
+        self._thread.start()
+
+    @property
+    def serving(self) -> bool:
+        """True while the service thread runs."""
+        return self._thread is not None and self._thread.is_alive()
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        """Stop the thread, disable the drive and announce it (one ACTUATOR_STATUS with drive OFF)."""
+        self._stop_event.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+            self._thread = None
+        with self._lock:
+            self.drive.reset()
+            self.actuator.reset()
+            self._publish_status(self.clock())
+
