@@ -363,7 +363,7 @@ def _cmd_dry_run(args: argparse.Namespace, console: Console) -> int:
     options = DryRunOptions(
         study=_study_options(args, controller=args.controller), rate_hz=args.rate, interface=args.interface,
         channel=args.channel, log_dir=args.log_dir, lockstep=args.lockstep, external_rig=args.external_rig,
-        show_console=not args.quiet,
+        show_console=not args.quiet, overrides=tuple(args.overrides),
     )
     result = dry_run(profile, options, console)
     session, motion = result.session, result.motion

@@ -43,6 +43,7 @@ class DryRunOptions:
     lockstep: bool = False
     external_rig: bool = False
     show_console: bool = True
+    overrides: tuple[str, ...] = ()
 
 
 @dataclass
@@ -76,6 +77,10 @@ def _rig_process(profile: Profile, options: DryRunOptions, can, rate_hz: float) 
                         ("--time-scale", study.time_scale), ("--duration", study.duration_s)):
         if value is not None:
             args += [flag, str(value)]
+    if profile.variant:
+        args += ["--variant", profile.variant]
+    for item in options.overrides:  # the rig must run the same profile as the harness
+        args += ["--set", item]
     if options.lockstep:
         args.append("--lockstep")
     return subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)

@@ -64,7 +64,7 @@ class SessionResult:
 
 
 class _SentFrameTap:
-    """Records sent frames with a wall-clock timestamp (the writer stamps them with loop time)."""
+    """Records sent frames as transmitted, with a wall-clock timestamp (the writer stamps loop time)."""
 
     __slots__ = ("record",)
 
@@ -73,6 +73,21 @@ class _SentFrameTap:
 
     def __call__(self, msg) -> None:
         msg.timestamp = time.time()
+        msg.is_rx = False
+        self.record(msg)
+
+
+class _ReceivedFrameTap:
+    """Records received frames as received: SocketCAN marks frames from other processes on
+    the same host ``is_rx=False``, so the direction comes from which side saw the frame."""
+
+    __slots__ = ("record",)
+
+    def __init__(self, record: Callable):
+        self.record = record
+
+    def __call__(self, msg) -> None:
+        msg.is_rx = True
         self.record(msg)
 
 
@@ -158,7 +173,7 @@ def run_session(
         ).start()
         heartbeat_every = max(1, round(settings.rate_hz / settings.can.heartbeat_rate_hz))
         tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every)
-        link.reader.tap = folder.record_frame
+        link.reader.tap = _ReceivedFrameTap(folder.record_frame)
         link.writer.tap = _SentFrameTap(folder.record_frame)
         if on_link is not None:
             on_link(link)

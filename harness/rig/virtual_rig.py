@@ -273,9 +273,11 @@ class VirtualRig:
 
     def _handle(self, kind: int, now: float) -> None:
         if kind == rx.COMMAND:
-            self._update_drive(now)
+            # Record the command before the watchdog judges: a frame that arrived is proof
+            # the harness is alive, even when this rig was the one that stalled.
             enable, force = self.inbox.command
             self.drive.on_command(bool(enable), force, now)
+            self._update_drive(now)
             if self.lockstep:
                 self._step(now)
         elif kind == rx.HEARTBEAT:

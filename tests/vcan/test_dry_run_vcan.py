@@ -1,0 +1,119 @@
+"""Dry runs on real SocketCAN (vcan0): the virtual rig and the harness as separate processes.
+
+Run inside User-Mode Linux by ``scripts/run-tests`` where the host kernel has no CAN. UML
+makes every system call slow (tens of microseconds), so these runs use lockstep: the rig
+advances one step per actuator command, and the results do not depend on timing.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import can
+import pytest
+
+from harness import exit_codes
+from harness.record import load_run
+
+pytestmark = pytest.mark.vcan
+
+REPO = Path(__file__).resolve().parents[2]
+HARNESS = [sys.executable, "-m", "harness.cli"]
+# Inside User-Mode Linux both processes share one slow virtual CPU and stalls of tens of
+# milliseconds are normal; the rig's drive watchdog gets 0.5 s there (behaviour, not timing).
+SLOW_HOST = ["--set", "rig.drive.watchdog_timeout_s=0.5"]
+DRIVE_ENABLED = 2
+ACTUATOR_STATUS_ID = 0x40
+
+
+def _harness(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    return subprocess.run([*HARNESS, *args], capture_output=True, text=True, timeout=timeout, cwd=REPO, stdin=subprocess.DEVNULL)
+
+
+def _only_folder(log_dir: Path) -> Path:
+    folders = [p for p in log_dir.iterdir() if p.is_dir()]
+    assert len(folders) == 1, folders
+    return folders[0]
+
+
+def test_dry_run_across_processes_over_vcan0(vcan_channel, tmp_path):
+    done = _harness("dry-run", "--interface", "socketcan", "--channel", vcan_channel, "--lockstep", "--quiet",
+                    "--duration", "2", "--log-dir", str(tmp_path), *SLOW_HOST)
+    assert done.returncode == exit_codes.OK, done.stdout[-2000:] + done.stderr[-2000:]
+    folder = _only_folder(tmp_path)
+    metadata = json.loads((folder / "metadata.json").read_text())
+    assert metadata["outcome"] == "completed"
+    assert metadata["can"]["interface"] == "socketcan"
+    frames = list(can.LogReader(str(folder / "can.log")))
+    sent = {m.arbitration_id for m in frames if not m.is_rx}
+    received = {m.arbitration_id for m in frames if m.is_rx}
+    assert {0x20, 0x50, 0x300} <= sent  # the harness: command, heartbeat, rig control
+    assert {0x30, 0x31, 0x40, 0x301} <= received  # the rig process: sensors, status, rig status
+    assert all(m.channel == vcan_channel for m in frames)
+
+
+def test_dry_run_trips_on_stroke_over_vcan0(vcan_channel, tmp_path):
+    done = _harness("dry-run", "--interface", "socketcan", "--channel", vcan_channel, "--lockstep", "--quiet",
+                    "--duration", "6", "--log-dir", str(tmp_path), *SLOW_HOST,
+                    "--set", "safety.stroke.soft_limit_m=0.006", "--set", "safety.stroke.fade_band_m=0.002",
+                    "--set", "safety.stroke.hard_limit_m=0.01", "--set", "safety.stroke.arm_tolerance_m=0.003")
+    assert done.returncode == exit_codes.TRIPPED, done.stdout[-2000:] + done.stderr[-2000:]
+    metadata = json.loads((_only_folder(tmp_path) / "metadata.json").read_text())
+    assert metadata["trip_reason"] in ("stroke_hard", "stroke_predictive")
+
+
+def _wait_for(predicate, timeout_s: float, what: str) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.05)
+
+
+def _running(log_dir: Path) -> bool:
+    folders = [p for p in log_dir.iterdir() if p.is_dir()] if log_dir.exists() else []
+    events = folders[0] / "events.jsonl" if folders else None
+    return events is not None and events.exists() and '"RUNNING"' in events.read_text(errors="replace")
+
+
+def test_harness_killed_mid_run_leaves_a_readable_folder_and_the_drive_disabled(vcan_channel, tmp_path):
+    rig = subprocess.Popen([*HARNESS, "rig", "--interface", "socketcan", "--channel", vcan_channel, "--lockstep", *SLOW_HOST],
+                           cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    harness = subprocess.Popen(
+        [*HARNESS, "dry-run", "--interface", "socketcan", "--channel", vcan_channel, "--lockstep", "--external-rig",
+         "--quiet", "--duration", "60", "--log-dir", str(tmp_path), *SLOW_HOST],
+        cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+    )
+    try:
+        _wait_for(lambda: _running(tmp_path), 240, "the dry run to reach RUNNING")
+        time.sleep(0.5)
+        listener = can.Bus(interface="socketcan", channel=vcan_channel)
+        try:
+            harness.send_signal(signal.SIGKILL)
+            harness.wait(timeout=30)
+            killed_at = time.monotonic()
+            states = []
+            while time.monotonic() - killed_at < 3.0:
+                msg = listener.recv(timeout=0.1)
+                if msg is not None and msg.arbitration_id == ACTUATOR_STATUS_ID and not msg.is_error_frame:
+                    states.append((time.monotonic() - killed_at, msg.data[1] >> 4))  # drive_state: bits 12-15
+        finally:
+            listener.shutdown()
+        assert states, "the rig sent no actuator status after the harness died"
+        assert states[-1][1] != DRIVE_ENABLED  # the drive-side watchdog disabled the drive
+        assert rig.poll() is None  # the rig itself is still up
+    finally:
+        if harness.poll() is None:
+            harness.kill()
+        rig.send_signal(signal.SIGINT)
+        rig.wait(timeout=60)
+    folder = _only_folder(tmp_path)
+    run = load_run(folder)
+    assert run.incomplete
+    assert json.loads((folder / "metadata.json").read_text())["outcome"] == "incomplete"
+    assert run.n_rows > 100  # what was flushed before the kill is there
