@@ -70,7 +70,8 @@ def _add_simulate(sub) -> None:
     control.add_argument(
         "--rig-effects", action="store_true",
         help="controlled case through the profile's rig models: sensor noise, quantization and delay, "
-        "actuator dynamics and limits, and the safety supervisor (what a dry run should reproduce)",
+        "actuator dynamics and limits, and the safety supervisor (what a dry run should reproduce); "
+        "--delay then adds sensor delay: one loop period (e.g. 0.002) mirrors a real-time dry run",
     )
     output = parser.add_argument_group("output")
     output.add_argument("--json", metavar="PATH", help="write peaks and record facts as JSON (SI units)")

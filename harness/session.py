@@ -191,7 +191,8 @@ def run_session(
                 raise
         bus = bus_statistics(link)
         folder.finish(result.outcome, trip_reason=result.trip_reason or None,
-                      summary={"timing": result.timing, "realtime": result.realtime_report, "bus": bus})
+                      summary={"timing": result.timing, "realtime": result.realtime_report, "bus": bus,
+                               "record_start_t_s": result.record_start_t_s})
         return SessionResult(result.outcome, result.trip_reason, folder.path, result, bus)
     except BaseException:
         if folder is not None:

@@ -153,7 +153,9 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
         from harness.twin import run_rig_twin
 
         rig_controller = build_controller_for_rig(profile, name)
-        result.cases["controlled"] = run_rig_twin(profile, motion, settings.rate_hz, rig_controller)
+        result.cases["controlled"] = run_rig_twin(
+            profile, motion, settings.rate_hz, rig_controller, asynchronous_delay_s=settings.transport_delay_s
+        )
     elif controller is not None:
         estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
         result.cases["controlled"] = run_case(

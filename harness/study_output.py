@@ -25,8 +25,10 @@ def write_study_folders(result, out_dir: str | Path) -> Path:
     profile = result.profile
     for name, case in result.cases.items():
         columns = list(case.columns)
+        suffix = " (rig effects)" if name == "controlled" and result.rig_effects else ""
         metadata = {
-            "profile": profile.name,
+            "profile_name": profile.name,
+            "label": f"{profile.name} simulate {name}{suffix}",
             "record": summary["record"],
             "controller": "none" if name == "passive" else result.controller_name,
             "sampling": summary["sampling"],

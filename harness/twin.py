@@ -125,6 +125,8 @@ def run_rig_twin(
     states[n_samples] = table.y
     applied[n_samples] = actuator.force_N
     measured[n_samples] = measured[n_samples - 1]
+    raw_force[n_samples], command_force[n_samples] = raw_force[n_samples - 1], command_force[n_samples - 1]
+    sliding_variable[n_samples], friction_estimate[n_samples] = sliding_variable[n_samples - 1], friction_estimate[n_samples - 1]
     end = n_samples + 1
     times = np.arange(end) * period
     true_columns = table.record.responses(times, states[:end], applied[:end])

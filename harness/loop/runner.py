@@ -63,6 +63,7 @@ class LoopResult:
     timing: dict = field(default_factory=dict)
     realtime_report: list[str] = field(default_factory=list)
     operator_stopped: bool = False
+    record_start_t_s: float | None = None
 
 
 class ControlLoop:
@@ -182,6 +183,7 @@ class ControlLoop:
             timing=timing.summary(),
             realtime_report=report.lines,
             operator_stopped=self.signals.stop_requested,
+            record_start_t_s=run_started,
         )
 
     def _update_status(self, t: float, run_started: float | None, duration_s: float, command) -> None:

@@ -31,8 +31,16 @@ def drift_height_px(n_stories: int) -> int:
     return max(420, 190 * n_stories + 90)
 
 
+def _record_start(run: RunData) -> float:
+    """Loop time at which the run's record (the table motion) started; 0 for simulations."""
+    summary = run.metadata.get("summary") or {}
+    start = summary.get("record_start_t_s") if isinstance(summary, dict) else None
+    return float(start) if isinstance(start, (int, float)) else 0.0
+
+
 def _time(run: RunData) -> np.ndarray:
-    return run.signals["t_s"]
+    """Time axis in record time, so runs of one record line up (a dry run arms and settles first)."""
+    return run.signals["t_s"] - _record_start(run)
 
 
 def _legend(ax: Axes, where: str = "right") -> None:
@@ -57,10 +65,12 @@ def drift_plot(runs: Sequence[RunData], out_dir: Path) -> PlotFile | None:
             for run, colour in zip(runs, colours(runs)):
                 if drift(story) in run.signals:
                     panel.plot(_time(run), run[drift(story)] * 1e3, color=colour, lw=1.0, label=run.label)
-            panel.set_ylabel(f"Story {story}\ndrift (mm)")
+            panel.text(0.005, 0.96, f"story {story}", transform=panel.transAxes, va="top", ha="left",
+                       fontweight="bold", bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.5})
         _legend(axes[0])
         axes[-1].set_xlabel("Time (s)")
-        fig.suptitle("Interstory drift")
+        fig.supylabel("Interstory drift (mm)")
+        fig.suptitle("Interstory drift (story j: floor j minus floor j-1)")
         return save(fig, "drift", "Interstory drift time histories per story", out_dir)
 
 
@@ -130,13 +140,19 @@ def _limit_lines(ax: Axes, runs: Sequence[RunData]) -> None:
 
 
 def _mark_events(ax: Axes, run: RunData, colour: str) -> None:
+    """A dotted line at every event; a label at the first event of each name only, so labels never pile up."""
     marked = [e for e in run.events if e.get("kind") in EVENT_KINDS and isinstance(e.get("t_s"), (int, float))]
-    for index, event in enumerate(marked):
-        ax.axvline(event["t_s"], color=colour, ls=":", lw=1.2)
-        if index < _MAX_EVENT_LABELS:
+    start = _record_start(run)
+    labelled: set[str] = set()
+    for event in marked:
+        t = event["t_s"] - start
+        ax.axvline(t, color=colour, ls=":", lw=1.2)
+        name = f"{event.get('kind')}: {event.get('name')}"
+        if name not in labelled and len(labelled) < _MAX_EVENT_LABELS:
+            labelled.add(name)
             ax.annotate(
-                f"{event.get('kind')}: {event.get('name')}",
-                xy=(event["t_s"], 1.0),
+                name,
+                xy=(t, 1.0),
                 xycoords=("data", "axes fraction"),
                 rotation=90,
                 va="top",
