@@ -244,7 +244,7 @@ def _add_run(sub) -> None:
     parser.set_defaults(handler=_cmd_run)
 
 
-def _study_options(args: argparse.Namespace, **extra) -> "StudyOptions":
+def _study_options(args: argparse.Namespace, **extra):
     from harness.study import StudyOptions
 
     return StudyOptions(
@@ -385,13 +385,12 @@ def _cmd_dry_run(args: argparse.Namespace, console: Console) -> int:
 
 
 def _cmd_run(args: argparse.Namespace, console: Console) -> int:
-    import dataclasses
     from pathlib import Path
 
     from harness.dryrun import LOG_DIR, can_settings
     from harness.profile import load_profile
     from harness.session import SessionSettings, run_session
-    from harness.study import prepare_motion
+    from harness.study import motion_facts, prepare_motion
 
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     motion = prepare_motion(profile, _study_options(args))
@@ -409,7 +408,7 @@ def _cmd_run(args: argparse.Namespace, console: Console) -> int:
     settings = SessionSettings(
         kind="run", can=can, rate_hz=rate, duration_s=motion.duration_s, controller=controller,
         log_dir=Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
-        metadata={"record": {"name": motion.name, "pga_g": motion.pga_g, "duration_s": motion.duration_s}},
+        metadata={"record": motion_facts(motion)},
     )
     session = run_session(profile, settings, console=console)
     _print_timing(console, session.loop.timing, rate)

@@ -22,7 +22,7 @@ from harness.model.plant import Plant, TableMotion
 from harness.profile import Profile
 from harness.session import SessionResult, SessionSettings, run_peaks, run_session
 from harness.simulation import CaseResult, SamplingSettings, run_case
-from harness.study import StudyOptions, make_controller, prepare_motion
+from harness.study import StudyOptions, make_controller, motion_facts, prepare_motion
 from harness.twin import run_rig_twin
 
 RIG_START = 1  # RIG_CONTROL command: start table
@@ -189,8 +189,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
         kind="dry-run", can=can, rate_hz=rate_hz, duration_s=motion.duration_s, controller=controller,
         log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
         show_console=options.show_console,
-        metadata={"record": {"name": motion.name, "pga_g": motion.pga_g, "pgv_m_s": motion.pgv_m_s,
-                             "pgd_m": motion.pgd_m, "time_scale": motion.time_scale, "duration_s": motion.duration_s}},
+        metadata={"record": motion_facts(motion)},
     )
     rig = rig_link = process = None
     switch_interval = sys.getswitchinterval()

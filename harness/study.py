@@ -58,14 +58,7 @@ class StudyResult:
         controlled = self.cases.get("controlled", self.cases["passive"])
         return {
             "profile": self.profile.name,
-            "record": {
-                "name": motion.name,
-                "pga_g": motion.pga_g,
-                "pgv_m_s": motion.pgv_m_s,
-                "pgd_m": motion.pgd_m,
-                "time_scale": motion.time_scale,
-                "duration_s": motion.duration_s,
-            },
+            "record": motion_facts(motion),
             "controller": self.controller_name,
             "sampling": {
                 "rate_hz": self.settings.rate_hz,
@@ -81,6 +74,18 @@ class StudyResult:
     def write_json(self, path: str | Path) -> None:
         """Write :meth:`to_json` to ``path``."""
         Path(path).write_text(json.dumps(self.to_json(), indent=2) + "\n")
+
+
+def motion_facts(motion) -> dict:
+    """Name, PGA (g), PGV (m/s), PGD (m), time scale and duration (s) of a processed motion."""
+    return {
+        "name": motion.name,
+        "pga_g": motion.pga_g,
+        "pgv_m_s": motion.pgv_m_s,
+        "pgd_m": motion.pgd_m,
+        "time_scale": motion.time_scale,
+        "duration_s": motion.duration_s,
+    }
 
 
 def prepare_motion(profile: Profile, options: StudyOptions):

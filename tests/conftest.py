@@ -17,3 +17,19 @@ def records_dir() -> Path:
     if not (SHARED_RECORDS / "elcentro_1940_NS.csv").is_file():
         pytest.skip(f"real records not found in {SHARED_RECORDS} (they are kept outside the project; see README)")
     return SHARED_RECORDS
+
+
+@pytest.fixture(scope="session")
+def eight():
+    """The eight-story building of SPEC 6a (profiles/eight_story.yaml)."""
+    from harness.profile import load_profile
+
+    return load_profile(PROFILES / "eight_story.yaml").structure
+
+
+@pytest.fixture(scope="session")
+def rig():
+    """The quarter-scale rig's building of SPEC 6b (profiles/nceer_4dof.yaml)."""
+    from harness.profile import load_profile
+
+    return load_profile(PROFILES / "nceer_4dof.yaml").structure

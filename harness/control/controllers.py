@@ -20,7 +20,23 @@ from harness.model.building import StateSpace
 from harness.signals import Measurements
 
 
-class StateFeedbackSMC:
+class _SlidingModeInternals:
+    """The internals every controller shows: S (m/s), G (N), lambda, and the raw force (N)."""
+
+    sliding_variable: float
+    equivalent_force_N: float
+    gain_lambda: float
+    force_N: float
+
+    def reset(self) -> None:
+        """Clear the internals."""
+        self.sliding_variable = 0.0
+        self.equivalent_force_N = 0.0
+        self.gain_lambda = 0.0
+        self.force_N = 0.0
+
+
+class StateFeedbackSMC(_SlidingModeInternals):
     """Full-state (Eq. 13, 15) or static-output (Eq. 16-17) sliding-mode control.
 
     Parameters
@@ -60,12 +76,6 @@ class StateFeedbackSMC:
         self.alpha_star = float(alpha_star)
         self.reset()
 
-    def reset(self) -> None:
-        """Clear the internals."""
-        self.sliding_variable = 0.0
-        self.equivalent_force_N = 0.0
-        self.gain_lambda = 0.0
-        self.force_N = 0.0
 
     def update(self, t: float, dt: float, meas: Measurements, friction_N: float, state: np.ndarray | None) -> float:
         """Return the raw force (N) for time ``t``; ``state`` is Z (full or estimated)."""
@@ -82,7 +92,7 @@ class StateFeedbackSMC:
         return self.force_N
 
 
-class PhiSMC:
+class PhiSMC(_SlidingModeInternals):
     """Partial restraint cancellation, the controller used on the shaking table (Eq. 22-23).
 
     ``S = p1 y_b + ydot_b``, ``lambda = S / m_b``,
@@ -113,12 +123,6 @@ class PhiSMC:
         self.delta = float(delta)
         self.reset()
 
-    def reset(self) -> None:
-        """Clear the internals."""
-        self.sliding_variable = 0.0
-        self.equivalent_force_N = 0.0
-        self.gain_lambda = 0.0
-        self.force_N = 0.0
 
     def update(self, t: float, dt: float, meas: Measurements, friction_N: float, state: np.ndarray | None = None) -> float:
         """Return the raw force (N) from the measured y_b, ydot_b, x_0 and the friction estimate."""

@@ -146,7 +146,7 @@ class ControlLoop:
         duration_s = self.duration_s
         timing = self.timing
         report = apply_realtime(self.config.realtime)
-        tick, status, health = self.tick, self.status, self.tick.health
+        tick, health = self.tick, self.tick.health
         run_started = armed_at = None
         finished_at = None
         outcome = "error"

@@ -17,8 +17,6 @@ checked against ``scipy.integrate.solve_ivp`` at rtol 1e-9 in the tests and in
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
 

@@ -49,8 +49,30 @@ _TIME_NAMES = ("t", "time", "sec", "seconds")
 Line = tuple[int, str]
 
 
+class SampledAcceleration:
+    """Shared facts of anything with ``accel_m_s2`` sampled every ``dt_s`` (records and table motions)."""
+
+    accel_m_s2: np.ndarray
+    dt_s: float
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples."""
+        return int(self.accel_m_s2.size)
+
+    @property
+    def duration_s(self) -> float:
+        """Time from the first to the last sample (s)."""
+        return (self.n_samples - 1) * self.dt_s
+
+    @property
+    def pga_g(self) -> float:
+        """Peak |acceleration| (g)."""
+        return float(np.max(np.abs(self.accel_m_s2))) / G_M_S2
+
+
 @dataclass(frozen=True, eq=False)
-class RawRecord:
+class RawRecord(SampledAcceleration):
     """An accelerogram as read from a file or generated: a fixed step and the samples.
 
     Parameters
@@ -80,20 +102,6 @@ class RawRecord:
         object.__setattr__(self, "dt_s", float(self.dt_s))
         object.__setattr__(self, "accel_m_s2", accel)
 
-    @property
-    def n_samples(self) -> int:
-        """Number of samples."""
-        return int(self.accel_m_s2.size)
-
-    @property
-    def duration_s(self) -> float:
-        """Time from the first to the last sample (s)."""
-        return (self.n_samples - 1) * self.dt_s
-
-    @property
-    def pga_g(self) -> float:
-        """Peak |acceleration| (g)."""
-        return float(np.max(np.abs(self.accel_m_s2))) / G_M_S2
 
 
 def load_record(path: str | Path, *, accel_unit: str | None = None, name: str | None = None) -> RawRecord:

@@ -48,7 +48,7 @@ from harness.records import baseline
 from harness.records.accel_units import G_M_S2
 from harness.records.checks import MIN_SAMPLES
 from harness.records.integration import interpolate, interpolate_scalar
-from harness.records.loaders import RawRecord
+from harness.records.loaders import RawRecord, SampledAcceleration
 
 #: Default highest frequency of the drift correction (Hz, in the processed time axis).
 DEFAULT_BASELINE_CORNER_HZ = 0.1
@@ -57,7 +57,7 @@ DEFAULT_TAPER_FRACTION = 0.01
 
 
 @dataclass(frozen=True, eq=False)
-class GroundMotion:
+class GroundMotion(SampledAcceleration):
     """The table motion for one run: a consistent triple on a uniform time grid (SI).
 
     Parameters
@@ -104,20 +104,6 @@ class GroundMotion:
             array.flags.writeable = False
             object.__setattr__(self, field, array)
 
-    @property
-    def n_samples(self) -> int:
-        """Number of samples."""
-        return int(self.t_s.size)
-
-    @property
-    def duration_s(self) -> float:
-        """Time from the first to the last sample (s)."""
-        return (self.n_samples - 1) * self.dt_s
-
-    @property
-    def pga_g(self) -> float:
-        """Peak |table acceleration| (g)."""
-        return float(np.max(np.abs(self.accel_m_s2))) / G_M_S2
 
     @property
     def pgv_m_s(self) -> float:

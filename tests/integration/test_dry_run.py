@@ -12,7 +12,6 @@ from pathlib import Path
 
 import can
 import numpy as np
-import pytest
 
 from harness import exit_codes
 from harness.cli import main

@@ -10,7 +10,7 @@ from harness.model.plant import Plant, TableMotion
 from harness.model.reference import ReferencePlant
 from harness.peaks import flatten
 from harness.profile import load_profile
-from harness.records import RecordConfig, load_motion
+from harness.records import load_motion
 from harness.simulation import SamplingSettings, run_case
 from harness.study import make_controller
 from tests.conftest import PROFILES

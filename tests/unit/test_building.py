@@ -6,18 +6,6 @@ import numpy as np
 import pytest
 
 from harness.model.building import BuildingConfig, acceleration_maps, fixed_base_modes, state_space
-from harness.profile import load_profile
-from tests.conftest import PROFILES
-
-
-@pytest.fixture(scope="module")
-def eight():
-    return load_profile(PROFILES / "eight_story.yaml").structure
-
-
-@pytest.fixture(scope="module")
-def rig():
-    return load_profile(PROFILES / "nceer_4dof.yaml").structure
 
 
 def test_eight_story_first_mode_matches_spec(eight):

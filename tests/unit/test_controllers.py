@@ -19,19 +19,7 @@ from harness.control.designs import (
 from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups, regular_form, sliding_poles
 from harness.errors import ModelError
 from harness.model.building import state_space
-from harness.profile import load_profile
 from harness.signals import Measurements
-from tests.conftest import PROFILES
-
-
-@pytest.fixture(scope="module")
-def eight():
-    return load_profile(PROFILES / "eight_story.yaml").structure
-
-
-@pytest.fixture(scope="module")
-def rig():
-    return load_profile(PROFILES / "nceer_4dof.yaml").structure
 
 
 def test_regular_form_isolates_the_force():

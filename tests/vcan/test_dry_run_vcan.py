@@ -8,7 +8,6 @@ advances one step per actuator command, and the results do not depend on timing.
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
