@@ -56,9 +56,10 @@ def main() -> int:
     sampler.start()
     profile = load_profile(REPO / "profiles" / "nceer_4dof.yaml")
     with tempfile.TemporaryDirectory() as log_dir:
-        options = DryRunOptions(study=StudyOptions(duration_s=duration, pga_g=args.pga), log_dir=log_dir, show_console=False)
+        options = DryRunOptions(study=StudyOptions(duration_s=duration, pga_g=args.pga), log_dir=log_dir,
+                                show_console=False, compare=False)  # the loop alone, not the offline twins
         result = dry_run(profile, options)
-    stop.set()
+        stop.set()
     after = [kib for t, kib in samples if t >= WARM_UP_S]
     growth_mib = (max(after) - after[0]) / 1024 if len(after) >= 2 else float("nan")
     timing = result.session.loop.timing

@@ -44,6 +44,7 @@ class DryRunOptions:
     external_rig: bool = False
     show_console: bool = True
     overrides: tuple[str, ...] = ()
+    compare: bool = True
 
 
 @dataclass
@@ -52,8 +53,8 @@ class DryRunResult:
 
     session: SessionResult
     peaks: dict
-    passive: CaseResult
-    twin: CaseResult
+    passive: CaseResult | None
+    twin: CaseResult | None
     motion: object
 
 
@@ -217,7 +218,9 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
         if process is not None:
             _stop_process(process)
     peaks = run_peaks(session.run_path, profile.structure.total_weight_N)
-    passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep)
+    passive = twin = None
+    if options.compare:
+        passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep)
     return DryRunResult(session, peaks, passive, twin, motion)
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.memory import prefaulted_zeros
+
 
 class TimingStats:
     """Preallocated per-tick timing arrays and their summary.
@@ -18,8 +20,8 @@ class TimingStats:
 
     def __init__(self, capacity: int):
         self._capacity = int(capacity)
-        self.lateness_s = np.zeros(self._capacity)
-        self.compute_s = np.zeros(self._capacity)
+        self.lateness_s = prefaulted_zeros(self._capacity)
+        self.compute_s = prefaulted_zeros(self._capacity)
         self.count = 0
         self.overruns = 0
 

@@ -21,6 +21,7 @@ import can
 import numpy as np
 
 from harness.errors import HarnessError
+from harness.memory import prefaulted_zeros
 
 #: Bit layout of :attr:`FrameRing.flags`.
 FLAG_EXTENDED = 1
@@ -131,11 +132,11 @@ class FrameRing:
         if capacity < 1:
             raise ValueError(f"found capacity={capacity}, expected >= 1")
         self._capacity = capacity
-        self._timestamp = np.zeros(capacity)
-        self._arbitration_id = np.zeros(capacity, dtype=np.uint32)
-        self._dlc = np.zeros(capacity, dtype=np.uint8)
-        self._flags = np.zeros(capacity, dtype=np.uint8)
-        self._channel = np.zeros(capacity, dtype=np.int16)
+        self._timestamp = prefaulted_zeros(capacity)
+        self._arbitration_id = prefaulted_zeros(capacity, dtype=np.uint32)
+        self._dlc = prefaulted_zeros(capacity, dtype=np.uint8)
+        self._flags = prefaulted_zeros(capacity, dtype=np.uint8)
+        self._channel = prefaulted_zeros(capacity, dtype=np.int16)
         self._data = bytearray(capacity * MAX_DATA)
         self._data_view = memoryview(self._data)
         self._channels: dict[Any, int] = {None: 0}

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from harness.memory import prefaulted_zeros
+
 from harness.model.plant import Plant
 
 RIG_TIME, RECORD_TIME, FORCE, STATE = 0, 1, 2, 3
@@ -29,7 +31,7 @@ class History:
 
     def __init__(self, capacity: int, state_size: int):
         self.capacity = int(capacity)
-        self.data = np.zeros((max(self.capacity, 1), STATE + state_size))
+        self.data = prefaulted_zeros((max(self.capacity, 1), STATE + state_size))
         self.count = 0
 
     def clear(self) -> None:
