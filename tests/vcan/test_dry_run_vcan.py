@@ -110,7 +110,7 @@ def test_harness_killed_mid_run_leaves_a_readable_folder_and_the_drive_disabled(
         if harness.poll() is None:
             harness.kill()
         rig.send_signal(signal.SIGINT)
-        rig.wait(timeout=60)
+        assert rig.wait(timeout=60) == exit_codes.STOPPED  # `harness rig` stops cleanly on Ctrl-C
     folder = _only_folder(tmp_path)
     run = load_run(folder)
     assert run.incomplete
