@@ -387,7 +387,7 @@ def _cmd_dry_run(args: argparse.Namespace, console: Console) -> int:
 def _cmd_run(args: argparse.Namespace, console: Console) -> int:
     from pathlib import Path
 
-    from harness.dryrun import LOG_DIR, can_settings
+    from harness.dryrun import LOG_DIR
     from harness.profile import load_profile
     from harness.session import SessionSettings, run_session
     from harness.study import motion_facts, prepare_motion
@@ -395,7 +395,7 @@ def _cmd_run(args: argparse.Namespace, console: Console) -> int:
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     motion = prepare_motion(profile, _study_options(args))
     rate = args.rate or profile.loop.rate_hz
-    can = can_settings(profile, args.interface, args.channel, rate)
+    can = profile.can_settings(args.interface, args.channel, rate)
     controller = args.controller or profile.control.controller
     if not args.yes:
         answer = console.input(

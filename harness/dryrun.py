@@ -10,7 +10,6 @@ simulated offline.
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 import sys
 import time
@@ -56,18 +55,6 @@ class DryRunResult:
     passive: CaseResult | None
     twin: CaseResult | None
     motion: object
-
-
-def can_settings(profile: Profile, interface: str | None, channel: str | None, rate_hz: float):
-    """The profile's CAN settings with the command line's interface, channel and rate."""
-    can = profile.can
-    return dataclasses.replace(
-        can,
-        interface=interface or can.interface,
-        channel=channel or can.channel,
-        command_rate_hz=rate_hz,
-        sensor_rate_hz=rate_hz,
-    )
 
 
 def _rig_process(profile: Profile, options: DryRunOptions, can, rate_hz: float) -> subprocess.Popen:
@@ -184,7 +171,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
 
     motion = prepare_motion(profile, options.study)
     rate_hz = options.rate_hz or profile.loop.rate_hz
-    can = can_settings(profile, options.interface, options.channel, rate_hz)
+    can = profile.can_settings(options.interface, options.channel, rate_hz)
     controller = options.study.controller or profile.control.controller
     settings = SessionSettings(
         kind="dry-run", can=can, rate_hz=rate_hz, duration_s=motion.duration_s, controller=controller,
@@ -194,17 +181,17 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
     )
     rig = rig_link = process = None
     switch_interval = sys.getswitchinterval()
-    if can.interface == "virtual":
-        # The rig shares this process: hand the interpreter lock over every 0.2 ms instead
-        # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
-        sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
-        rig_link = open_rig(can)
-        rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=options.lockstep, can_config=can)
-        rig.start_thread()
-    elif not options.external_rig:
-        process = _rig_process(profile, options, can, rate_hz)
-    coordinator = RigCoordinator(options.lockstep, 1.0 / rate_hz, process)
     try:
+        if can.interface == "virtual":
+            # The rig shares this process: hand the interpreter lock over every 0.2 ms instead
+            # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
+            sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
+            rig_link = open_rig(can)
+            rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=options.lockstep, can_config=can)
+            rig.start_thread()
+        elif not options.external_rig:
+            process = _rig_process(profile, options, can, rate_hz)
+        coordinator = RigCoordinator(options.lockstep, 1.0 / rate_hz, process)
         session = run_session(
             profile, settings, on_start=coordinator.on_start,
             make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
@@ -214,6 +201,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
         sys.setswitchinterval(switch_interval)
         if rig is not None:
             rig.stop()
+        if rig_link is not None:
             rig_link.close()
         if process is not None:
             _stop_process(process)

@@ -78,6 +78,17 @@ class Profile:
         """Directory of the profile file (relative paths in it are relative to this)."""
         return Path(self.source_path).parent if self.source_path else Path.cwd()
 
+    def can_settings(self, interface: str | None = None, channel: str | None = None, rate_hz: float | None = None) -> CanConfig:
+        """The ``can`` section with the command line's interface and channel, and the loop rate.
+
+        The actuator command and the sensor frames are sent once per tick, so their rates
+        follow ``rate_hz`` when it is given.
+        """
+        changes: dict = {key: value for key, value in (("interface", interface), ("channel", channel)) if value}
+        if rate_hz:
+            changes.update(command_rate_hz=rate_hz, sensor_rate_hz=rate_hz)
+        return dataclasses.replace(self.can, **changes) if changes else self.can
+
     def resolved_data(self) -> dict:
         """The fully resolved profile as plain data (SI), for run folders."""
         data = to_data(self)

@@ -63,31 +63,24 @@ class SessionResult:
         return OUTCOME_EXIT.get(self.outcome, exit_codes.INTERNAL_ERROR)
 
 
-class _SentFrameTap:
-    """Records sent frames as transmitted, with a wall-clock timestamp (the writer stamps loop time)."""
+class _FrameTap:
+    """Records every frame one side of the link saw, with its direction.
 
-    __slots__ = ("record",)
+    The direction comes from which side saw the frame: SocketCAN marks frames from other
+    processes on the same host ``is_rx=False``. Sent frames get a wall-clock timestamp
+    (the writer stamps them with loop time); received ones keep the bus's.
+    """
 
-    def __init__(self, record: Callable):
+    __slots__ = ("record", "received")
+
+    def __init__(self, record: Callable, received: bool):
         self.record = record
+        self.received = received
 
     def __call__(self, msg) -> None:
-        msg.timestamp = time.time()
-        msg.is_rx = False
-        self.record(msg)
-
-
-class _ReceivedFrameTap:
-    """Records received frames as received: SocketCAN marks frames from other processes on
-    the same host ``is_rx=False``, so the direction comes from which side saw the frame."""
-
-    __slots__ = ("record",)
-
-    def __init__(self, record: Callable):
-        self.record = record
-
-    def __call__(self, msg) -> None:
-        msg.is_rx = True
+        if not self.received:
+            msg.timestamp = time.time()
+        msg.is_rx = self.received
         self.record(msg)
 
 
@@ -173,8 +166,8 @@ def run_session(
         ).start()
         heartbeat_every = max(1, round(settings.rate_hz / settings.can.heartbeat_rate_hz))
         tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every)
-        link.reader.tap = _ReceivedFrameTap(folder.record_frame)
-        link.writer.tap = _SentFrameTap(folder.record_frame)
+        link.reader.tap = _FrameTap(folder.record_frame, received=True)
+        link.writer.tap = _FrameTap(folder.record_frame, received=False)
         if on_link is not None:
             on_link(link)
         lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None

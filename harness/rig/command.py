@@ -8,26 +8,17 @@ event, then stop cleanly: drive disabled and announced, bus shut down.
 
 from __future__ import annotations
 
-import dataclasses
 import threading
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from drivers.config import CanConfig
 from drivers.link import open_rig
 from harness import exit_codes
 from harness.errors import BusError, HarnessError
 from harness.profile import load_profile
 from harness.rig.virtual_rig import VirtualRig
 from harness.study import StudyOptions, prepare_motion
-
-
-def rig_can_config(profile, interface: str | None = None, channel: str | None = None) -> CanConfig:
-    """The profile's ``can`` section (defaults if it has none) with the command-line overrides."""
-    config = getattr(profile, "can", None) or CanConfig()
-    changes = {key: value for key, value in (("interface", interface), ("channel", channel)) if value}
-    return dataclasses.replace(config, **changes) if changes else config
 
 
 def run_rig_command(
@@ -88,8 +79,9 @@ def run_rig_command(
     options = options or StudyOptions()
     profile = load_profile(profile_path, variant, overrides)
     motion = prepare_motion(profile, options)
-    can_config = rig_can_config(profile, interface, channel)
-    period = 1.0 / (options.rate_hz or profile.loop.rate_hz)
+    rate_hz = options.rate_hz or profile.loop.rate_hz
+    can_config = profile.can_settings(interface, channel, rate_hz)
+    period = 1.0 / rate_hz
     stop = stop_event or threading.Event()
     with open_rig(can_config) as link:
         rig = VirtualRig(
