@@ -43,7 +43,7 @@ def cyclictest(interval_us: int, duration_s: float, priority: int) -> dict | Non
     if exe is None:
         return None
     loops = int(duration_s * 1e6 / interval_us)
-    args = [exe, "-q", "-t1", f"-p{priority}", f"-i{interval_us}", f"-l{loops}", "-h20000", "-m" if priority else "-n"]
+    args = [exe, "-q", "-t1", f"-p{priority}", f"-i{interval_us}", f"-l{loops}", "-h20000"] + (["-m"] if priority else [])
     done = subprocess.run(args, capture_output=True, text=True, timeout=duration_s * 3 + 30)
     if done.returncode != 0:
         return {"error": done.stderr.strip()[-300:]}
@@ -55,7 +55,7 @@ def cyclictest(interval_us: int, duration_s: float, priority: int) -> dict | Non
         if line.startswith("#") or not line.strip():
             continue
         parts = line.split()
-        if len(parts) >= 2 and parts[0].isdigit():
+        if len(parts) >= 2 and parts[0].isdigit() and parts[1].isdigit():
             latencies.append(int(parts[0]))
             counts.append(int(parts[1]))
     counts_arr = np.array(counts)
@@ -84,6 +84,8 @@ def loop_run(rate_hz: float, duration_s: float, log_dir: Path) -> dict:
         "lateness_max_us": timing["lateness_max_s"] * 1e6,
         "compute_median_us": timing["compute_median_s"] * 1e6,
         "compute_p99_us": timing["compute_p99_s"] * 1e6,
+        "cpu_median_us": timing["cpu_median_s"] * 1e6,
+        "cpu_p99_us": timing["cpu_p99_s"] * 1e6,
         "overruns": timing["overruns"],
         "frames_received": result.session.bus["frames_received"],
         "frames_lost": result.session.bus["frames_lost"],
@@ -106,14 +108,15 @@ def main() -> int:
             print(json.dumps(rows[-1]), flush=True)
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps({"duration_s": args.duration, "rows": rows}, indent=2) + "\n")
-    print("\n| rate | loop lateness median / p99 / p99.9 / max (us) | compute median / p99 (us) | overruns | frames lost / received "
+    print("\n| rate | loop lateness median / p99 / p99.9 / max (us) | compute median / p99 (us) | loop-thread CPU median / p99 (us) | overruns | frames lost / received "
           "| cyclictest normal median / p99 / max (us) | cyclictest FIFO 80 median / p99 / max (us) | loop p99 / cyclictest p99 |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for row in rows:
         lp, cn, cf = row["loop"], row["cyclictest_normal"] or {}, row["cyclictest_fifo80"] or {}
         ratio = lp["lateness_p99_us"] / cn["p99_us"] if cn.get("p99_us") else float("nan")
         print(f"| {row['rate_hz']:.0f} Hz | {lp['lateness_median_us']:.1f} / {lp['lateness_p99_us']:.1f} / {lp['lateness_p999_us']:.0f} / "
-              f"{lp['lateness_max_us']:.0f} | {lp['compute_median_us']:.1f} / {lp['compute_p99_us']:.1f} | {lp['overruns']} | "
+              f"{lp['lateness_max_us']:.0f} | {lp['compute_median_us']:.1f} / {lp['compute_p99_us']:.1f} | "
+              f"{lp['cpu_median_us']:.1f} / {lp['cpu_p99_us']:.1f} | {lp['overruns']} | "
               f"{lp['frames_lost']} / {lp['frames_received']} | {cn.get('median_us', float('nan')):.0f} / {cn.get('p99_us', float('nan')):.0f} / "
               f"{cn.get('max_us', float('nan')):.0f} | {cf.get('median_us', float('nan')):.0f} / {cf.get('p99_us', float('nan')):.0f} / "
               f"{cf.get('max_us', float('nan')):.0f} | {ratio:.2f} |")

@@ -158,9 +158,9 @@ class ControlLoop:
                 t, lateness = self._wait(k)
                 health.operator_stop = self.signals.stop_requested
                 health.operator_trip = self.signals.trip_requested
-                started = time.perf_counter()
+                started, cpu_started = time.perf_counter(), time.thread_time()
                 command = tick.run(t, self.period_s, t, lateness, self.scheduler.consecutive_overruns, self.lockstep is None)
-                timing.add(lateness, time.perf_counter() - started)
+                timing.add(lateness, time.perf_counter() - started, time.thread_time() - cpu_started)
                 run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
                 self._update_status(t, run_started, duration_s, command)
                 k += 1

@@ -16,20 +16,32 @@ class TimingStats:
         Most ticks recorded; later ticks only update the counters.
     """
 
-    __slots__ = ("lateness_s", "compute_s", "count", "overruns", "_capacity")
+    __slots__ = ("lateness_s", "compute_s", "cpu_s", "count", "overruns", "_capacity")
 
     def __init__(self, capacity: int):
         self._capacity = int(capacity)
         self.lateness_s = prefaulted_zeros(self._capacity)
         self.compute_s = prefaulted_zeros(self._capacity)
+        self.cpu_s = prefaulted_zeros(self._capacity)
         self.count = 0
         self.overruns = 0
 
-    def add(self, lateness_s: float, compute_s: float) -> None:
-        """Record one tick (no allocation)."""
+    def add(self, lateness_s: float, compute_s: float, cpu_s: float = 0.0) -> None:
+        """Record one tick (no allocation).
+
+        Parameters
+        ----------
+        lateness_s : float
+            Wake-up lateness against the deadline (s).
+        compute_s : float
+            Wall-clock time of the tick's work (s), including any wait for the interpreter lock.
+        cpu_s : float
+            CPU time the loop thread itself spent on the tick (s).
+        """
         if self.count < self._capacity:
             self.lateness_s[self.count] = lateness_s
             self.compute_s[self.count] = compute_s
+            self.cpu_s[self.count] = cpu_s
         self.count += 1
 
     def recent_percentiles(self, window: int = 500) -> tuple[float, float]:
@@ -42,12 +54,12 @@ class TimingStats:
         return float(p50), float(p99)
 
     def summary(self) -> dict:
-        """Median, p99, p99.9 and max of lateness and compute time (s), and counts."""
+        """Median, p99, p99.9 and max of lateness, compute (wall-clock) and CPU time per tick (s), and counts."""
         n = min(self.count, self._capacity)
         if n == 0:
             return {"ticks": 0, "overruns": self.overruns}
         result: dict = {"ticks": self.count, "overruns": self.overruns}
-        for name, values in (("lateness", self.lateness_s[:n]), ("compute", self.compute_s[:n])):
+        for name, values in (("lateness", self.lateness_s[:n]), ("compute", self.compute_s[:n]), ("cpu", self.cpu_s[:n])):
             p50, p99, p999 = np.percentile(values, [50, 99, 99.9])
             result[f"{name}_median_s"] = float(p50)
             result[f"{name}_p99_s"] = float(p99)

@@ -42,12 +42,13 @@ def test_nothing_is_requested_by_default():
 def test_timing_statistics_summarise_what_was_added():
     stats = TimingStats(1000)
     for k in range(2000):  # more than the capacity: counters go on, arrays stop
-        stats.add(k * 1e-6, 5e-5)
+        stats.add(k * 1e-6, 5e-5, 4e-5)
     summary = stats.summary()
     assert summary["ticks"] == 2000
     assert summary["lateness_max_s"] == pytest.approx(999e-6)
     assert summary["lateness_median_s"] == pytest.approx(np.median(np.arange(1000) * 1e-6))
     assert summary["compute_median_s"] == 5e-5
+    assert summary["cpu_median_s"] == 4e-5
 
 
 def test_first_ctrl_c_asks_for_a_stop_second_for_a_trip_sigterm_trips():
