@@ -211,6 +211,7 @@ def _cmd_rig(args: argparse.Namespace, console: Console) -> int:
     from harness.rig import run_rig_command
 
     _stop_on_signals()
+    _compile_kernels(console)
     options = _study_options(args, rate_hz=args.rate)
     console.print(f"virtual rig on {args.interface or 'the profile interface'}:{args.channel or 'the profile channel'}"
                   f"{' (lockstep)' if args.lockstep else ''}; Ctrl-C stops it")
@@ -355,6 +356,14 @@ def _cmd_simulate(args: argparse.Namespace, console: Console) -> int:
     return exit_codes.OK
 
 
+def _compile_kernels(console: Console) -> None:
+    """Compile the numba kernels up front, saying so when it takes a while (the first run of a checkout)."""
+    from harness.model.warmup import warm_up
+
+    with console.status("compiling the integration kernels (first run of a checkout only, about a minute) ..."):
+        warm_up()
+
+
 def _cmd_dry_run(args: argparse.Namespace, console: Console) -> int:
     from harness.dryrun import DryRunOptions, dry_run
     from harness.peak_table import peak_table
@@ -367,6 +376,7 @@ def _cmd_dry_run(args: argparse.Namespace, console: Console) -> int:
         channel=args.channel, log_dir=args.log_dir, lockstep=args.lockstep, external_rig=args.external_rig,
         show_console=not args.quiet, overrides=tuple(args.overrides),
     )
+    _compile_kernels(console)
     result = dry_run(profile, options, console)
     session, motion = result.session, result.motion
     console.print(
@@ -411,6 +421,7 @@ def _cmd_run(args: argparse.Namespace, console: Console) -> int:
         log_dir=Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
         metadata={"record": motion_facts(motion)},
     )
+    _compile_kernels(console)
     session = run_session(profile, settings, console=console)
     _print_timing(console, session.loop.timing, rate)
     _print_outcome(console, session)

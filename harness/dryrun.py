@@ -18,6 +18,7 @@ from pathlib import Path
 
 from harness.errors import BusError
 from harness.model.plant import Plant, TableMotion
+from harness.model.warmup import warm_up
 from harness.profile import Profile
 from harness.session import SessionResult, SessionSettings, run_peaks, run_session
 from harness.simulation import CaseResult, SamplingSettings, run_case
@@ -169,6 +170,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
     from drivers.link import open_rig
     from harness.rig import VirtualRig
 
+    warm_up()  # compile the kernels now, never inside the loop or the rig
     motion = prepare_motion(profile, options.study)
     rate_hz = options.rate_hz or profile.loop.rate_hz
     can = profile.can_settings(options.interface, options.channel, rate_hz)

@@ -23,6 +23,7 @@ from harness.errors import ProfileError
 from harness.loop.row import COLUMNS, N_STORIES
 from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult, LoopStatus
 from harness.loop.tick import ControlTick
+from harness.model.warmup import warm_up
 from harness.peaks import peak_responses
 from harness.profile import Profile
 from harness.record import RunFolder, load_run
@@ -154,6 +155,7 @@ def run_session(
     if profile.structure.n_stories != N_STORIES:
         raise ProfileError(f"the CAN protocol carries {N_STORIES} stories; this profile has {profile.structure.n_stories}",
                            profile.source_path, "structure")
+    warm_up()  # the estimator's kernel must not compile inside the first tick
     controller = build_controller_for_rig(profile, settings.controller)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
     supervisor = Supervisor(profile.safety)

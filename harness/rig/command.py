@@ -17,6 +17,7 @@ from drivers.link import open_rig
 from harness import exit_codes
 from harness.errors import BusError, HarnessError
 from harness.profile import load_profile
+from harness.model.warmup import warm_up
 from harness.rig.virtual_rig import VirtualRig
 from harness.study import StudyOptions, prepare_motion
 
@@ -78,6 +79,7 @@ def run_rig_command(
     """
     options = options or StudyOptions()
     profile = load_profile(profile_path, variant, overrides)
+    warm_up()  # compile the plant's kernel before serving the bus in real time
     motion = prepare_motion(profile, options)
     rate_hz = options.rate_hz or profile.loop.rate_hz
     can_config = profile.can_settings(interface, channel, rate_hz)
