@@ -39,9 +39,12 @@ def warm_up() -> bool:
     hysteretic_rate(0.0, 0.0, params)
     advance_hysteretic(0.0, 0.1, 1e-3, params)
     estimator_step(0.0, 0.1, 0.1, 1e-3, params)
-    table_state(0.0, samples, samples, samples, 0.01)
-    derivative(0.0, y, out, 0.0, a_matrix, b_vector, 0.0, params, samples, samples, samples, 0.01)
-    advance(y, 0.0, 1e-3, 0.0, a_matrix, b_vector, 0.0, params, samples, samples, samples, 0.01, atol, 1e-6, make_work(size + 1))
+    read_only = samples.copy()
+    read_only.flags.writeable = False  # processed records are read-only: numba compiles them apart
+    for table in (samples, read_only):
+        table_state(0.0, table, table, table, 0.01)
+        derivative(0.0, y, out, 0.0, a_matrix, b_vector, 0.0, params, table, table, table, 0.01)
+        advance(y, 0.0, 1e-3, 0.0, a_matrix, b_vector, 0.0, params, table, table, table, 0.01, atol, 1e-6, make_work(size + 1))
     _warm = True
     return True
 

@@ -166,3 +166,22 @@ def test_bus_load_too_high_is_refused_before_anything_moves(tmp_path, capsys):
     assert status == exit_codes.INPUT_ERROR
     assert "%" in err and "bus" in err.lower()
     assert not any(tmp_path.iterdir())  # nothing written, nothing sent
+
+
+def test_nothing_compiles_inside_a_run(tmp_path, capsys):
+    """The kernels are compiled before the loop starts: a compilation inside a run stalls it for seconds."""
+    import numba
+
+    import harness.model.bearing as bearing
+    import harness.model.integrator as integrator
+    from harness.model.warmup import warm_up
+
+    warm_up()
+    kernels = {name: f for module in (bearing, integrator) for name, f in vars(module).items()
+               if isinstance(f, numba.core.registry.CPUDispatcher)}
+    before = {name: set(f.signatures) for name, f in kernels.items()}
+    status, _ = _dry_run(tmp_path, "--duration", "1")
+    capsys.readouterr()
+    assert status == exit_codes.OK
+    compiled = {name: set(f.signatures) - before[name] for name, f in kernels.items() if set(f.signatures) - before[name]}
+    assert not compiled, f"compiled during the run: {compiled}"
