@@ -154,12 +154,15 @@ class ControlLoop:
         try:
             self.scheduler.start()
             k = 0
+            previous_t = -self.period_s
             while True:
                 t, lateness = self._wait(k)
+                dt = t - previous_t  # a whole period, or more after deadlines were skipped
+                previous_t = t
                 health.operator_stop = self.signals.stop_requested
                 health.operator_trip = self.signals.trip_requested
                 started, cpu_started = time.perf_counter(), time.thread_time()
-                command = tick.run(t, self.period_s, t, lateness, self.scheduler.consecutive_overruns, self.lockstep is None)
+                command = tick.run(t, dt, t, lateness, self.scheduler.consecutive_overruns, self.lockstep is None)
                 timing.add(lateness, time.perf_counter() - started, time.thread_time() - cpu_started)
                 run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
                 self._update_status(t, run_started, duration_s, command)
