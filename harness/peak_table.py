@@ -35,7 +35,8 @@ def peak_table(passive: Mapping, controlled: Mapping | None, title: str, labels:
     def row(name: str, unit: str, p: float, c: float | None, scale: float, digits: int) -> None:
         cells = [name, unit, _fmt(p, scale, digits)]
         if controlled is not None:
-            cells += [_fmt(c, scale, digits), f"{reduction_pct(p, c):.1f}"]
+            reduction = reduction_pct(p, c)
+            cells += [_fmt(c, scale, digits), "-" if reduction is None else f"{reduction:.1f}"]
         table.add_row(*cells)
 
     n = len(passive["drift_m"])

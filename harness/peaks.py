@@ -19,9 +19,16 @@ def story_count(columns: Mapping[str, np.ndarray]) -> int:
     return n
 
 
+def peak_abs(values: np.ndarray) -> float | None:
+    """Largest finite |value|, or None if there is none."""
+    values = np.asarray(values, dtype=float)
+    finite = np.abs(values[np.isfinite(values)])
+    return float(finite.max()) if finite.size else None
+
+
 def _peak(values: np.ndarray) -> float:
-    finite = np.asarray(values, dtype=float)
-    return float(np.nanmax(np.abs(finite))) if finite.size else float("nan")
+    peak = peak_abs(values)
+    return float("nan") if peak is None else peak
 
 
 def peak_responses(columns: Mapping[str, np.ndarray], total_weight_N: float, force_column: str = "force_command_N") -> dict:
@@ -54,9 +61,11 @@ def peak_responses(columns: Mapping[str, np.ndarray], total_weight_N: float, for
     }
 
 
-def reduction_pct(passive: float, hybrid: float) -> float:
-    """Percent reduction ``(passive - hybrid) / passive`` (SPEC 5); NaN if passive is zero."""
-    return 100.0 * (passive - hybrid) / passive if passive else float("nan")
+def reduction_pct(passive: float | None, hybrid: float | None) -> float | None:
+    """Percent reduction ``100 (passive - hybrid) / passive`` (SPEC 5); None if either is absent or passive is 0."""
+    if passive is None or hybrid is None or passive == 0.0:
+        return None
+    return 100.0 * (passive - hybrid) / passive
 
 
 def flatten(peaks: Mapping) -> dict[str, float]:

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.peaks import peak_abs, reduction_pct
+
 from harness.record.columns import drift, floor_acceleration
 from harness.record.reader import RunData
 
@@ -75,12 +77,6 @@ def quantities(n_stories: int) -> list[Quantity]:
     return rows
 
 
-def peak_abs(values: np.ndarray) -> float | None:
-    """Largest finite |value|, or None if there is none."""
-    finite = np.abs(values[np.isfinite(values)])
-    return float(finite.max()) if finite.size else None
-
-
 def force_column(run: RunData) -> str | None:
     """The column holding the control force u in ``run`` (:data:`FORCE_COLUMNS`, all-NaN ones skipped), or None."""
     for name in FORCE_COLUMNS:
@@ -126,9 +122,5 @@ def _percent_of_weight(run: RunData, column: str | None) -> float | None:
     peak = peak_abs(run.signals[column])
     return None if peak is None else 100.0 * peak / float(weight)
 
-
-def reduction_percent(passive: float | None, hybrid: float | None) -> float | None:
-    """``100 * (passive - hybrid) / passive`` (SPEC section 5); None if either is absent or passive is 0."""
-    if passive is None or hybrid is None or passive == 0.0:
-        return None
-    return 100.0 * (passive - hybrid) / passive
+#: The report's name for :func:`harness.peaks.reduction_pct`: one SPEC 5 formula for reports and consoles.
+reduction_percent = reduction_pct
