@@ -9,3 +9,7 @@
 - :mod:`drivers.bus`: :func:`~drivers.bus.open_bus` for any python-can interface; error-frame and send-failure accounting.
 - :mod:`drivers.reader` / :mod:`drivers.writer`: poll-in-the-tick readers and preallocated-frame writers, harness and rig side.
 """
+
+from drivers.seqpacket import register as _register_seqpacket
+
+_register_seqpacket()  # can.Bus(interface="seqpacket") works before the entry point is installed

@@ -161,6 +161,20 @@ class TestVirtualContract(BusContract):
         return CanConfig(interface="no_such_interface", channel="x"), r"'no_such_interface' is not available.*virtual"
 
 
+class TestSeqPacketContract(BusContract):
+    """The contract on this project's ``seqpacket`` interface (Unix SOCK_SEQPACKET; the first bus opened is the hub)."""
+
+    @pytest.fixture
+    def config(self) -> CanConfig:
+        return CanConfig(interface="seqpacket", channel=f"contract-{uuid.uuid4().hex}")
+
+    @pytest.fixture
+    def nonexistent(self, tmp_path: Path) -> tuple[CanConfig, str]:
+        # names are created on demand; the unopenable case is a socket path in a missing directory
+        missing = tmp_path / "no_such_dir" / "bus.sock"
+        return CanConfig(interface="seqpacket", channel=str(missing)), r"seqpacket.*directory .*no_such_dir.* does not exist"
+
+
 # --- open_bus error messages (no bus needed) -----------------------------------------------
 
 
