@@ -294,13 +294,49 @@ def load_protocol(path: str | Path | None = None) -> Protocol:
         If the file is missing, does not parse, or breaks the protocol's conventions.
     """
     dbc = Path(path) if path else DEFAULT_DBC
+    text = _read_dbc_text(dbc)
     try:
-        database = cantools.database.load_file(str(dbc), database_format="dbc")
-    except FileNotFoundError as err:
-        raise ProtocolError(f"DBC file {dbc} not found") from err
+        database = cantools.database.load_string(text, database_format="dbc")
     except Exception as err:  # cantools raises several unrelated types for a bad file
-        raise ProtocolError(f"{dbc}: not a readable DBC file: {err}") from err
+        raise ProtocolError(f"{dbc}: not a readable DBC file: {_printable(str(err))}") from err
     return Protocol(database, dbc)
+
+
+#: Largest DBC file read (bytes); the rig's DBC is about 10 kB.
+MAX_DBC_BYTES = 5_000_000
+_CONTROL_BYTES = frozenset(range(0, 9)) | frozenset(range(14, 32)) | {127}
+
+
+def _read_dbc_text(dbc: Path) -> str:
+    """The DBC's text, refusing a missing file, a directory, a huge or a binary file with a short message."""
+    if dbc.is_dir():
+        raise ProtocolError(f"DBC file {dbc} is a directory, expected a DBC text file")
+    try:
+        size = dbc.stat().st_size
+        if size > MAX_DBC_BYTES:
+            raise ProtocolError(f"DBC file {dbc} is {size} bytes, expected a DBC text file under {MAX_DBC_BYTES} bytes")
+        data = dbc.read_bytes()
+    except FileNotFoundError as err:
+        raise ProtocolError(f"DBC file {dbc} not found, expected an existing DBC file") from err
+    except OSError as err:
+        raise ProtocolError(f"cannot read DBC file {dbc}: {err.strerror or err}") from err
+    bad = next((i for i, byte in enumerate(data) if byte in _CONTROL_BYTES), None)
+    if bad is not None:
+        raise ProtocolError(
+            f"DBC file {dbc} is not a text file (control byte 0x{data[bad]:02x} at offset {bad}), expected a DBC text file"
+        )
+    try:
+        return data.decode("cp1252")  # the encoding cantools reads DBC files in
+    except UnicodeDecodeError as err:
+        raise ProtocolError(f"DBC file {dbc}: byte 0x{data[err.start]:02x} at offset {err.start} is not cp1252 text, "
+                            "expected a DBC text file") from err
+
+
+def _printable(text: str, limit: int = 200) -> str:
+    """``text`` cut to its first line and ``limit`` characters, with anything unprintable escaped."""
+    line = text.strip().splitlines()[0] if text.strip() else ""
+    shown = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in line)
+    return shown if len(shown) <= limit else shown[: limit - 3] + "..."
 
 
 def check_protocol_version(protocol: Protocol, expected: int) -> None:

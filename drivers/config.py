@@ -27,6 +27,10 @@ RATE_FIELDS: dict[str, str] = {
     "RIG_STATUS": "rig_status_rate_hz",
 }
 
+#: Further senders of a message, each at its own rate (Hz): the ESTOP ID carries the harness's
+#: (or any node's) active stop at ``estop_rate_hz`` and the panel's heartbeat at ``estop_panel_rate_hz``.
+EXTRA_RATE_FIELDS: dict[str, tuple[str, ...]] = {"ESTOP": ("estop_panel_rate_hz",)}
+
 #: The protocol version of the packaged drivers/rig.dbc.
 CURRENT_PROTOCOL_VERSION = 1
 
@@ -51,8 +55,10 @@ class CanConfig:
         Rates of the messages (Hz); see :data:`RATE_FIELDS`.
     timestamp_source : {"poll", "message"}
         Receive time of a sample: the ``now`` passed to ``poll`` (default; same clock
-        as the loop), or the frame's own ``msg.timestamp`` (wall-clock epoch seconds
-        for socketcan and virtual: the loop must then use that clock too).
+        as the loop), or the frame's own ``msg.timestamp`` (wall-clock epoch seconds for
+        socketcan, virtual and seqpacket), which the reader moves onto the loop's clock
+        (``now - (time.time() - msg.timestamp)`` as the frame is handled), so ages are right
+        in both modes; a timestamp from the future is invalid and trips ``sensor_stale``.
     max_frames_per_poll : int
         Upper bound of frames one ``poll`` handles, so a flooded bus cannot stall a tick.
     dbc_path : str
@@ -70,6 +76,9 @@ class CanConfig:
     status_rate_hz: float = quantity(250.0, unit="Hz", gt=0.0, le=10_000.0, doc="ACTUATOR_STATUS rate")
     heartbeat_rate_hz: float = quantity(100.0, unit="Hz", gt=0.0, le=10_000.0, doc="HEARTBEAT rate")
     estop_rate_hz: float = quantity(100.0, unit="Hz", gt=0.0, le=10_000.0, doc="ESTOP repetition rate while active (budgeted)")
+    estop_panel_rate_hz: float = quantity(
+        20.0, unit="Hz", gt=0.0, le=1_000.0, doc="E-stop panel heartbeat (ESTOP, source 3, active=0) rate (budgeted)",
+    )
     rig_status_rate_hz: float = quantity(50.0, unit="Hz", gt=0.0, le=10_000.0, doc="RIG_STATUS rate (virtual rig)")
     rig_control_rate_hz: float = quantity(10.0, unit="Hz", gt=0.0, le=10_000.0, doc="RIG_CONTROL burst rate (budgeted)")
     timestamp_source: Literal["poll", "message"] = quantity("poll", doc="receive time: poll's now, or msg.timestamp")
@@ -83,5 +92,11 @@ class CanConfig:
             raise ValueError("channel is empty; expected a channel such as 'vcan0'")
 
     def rates_hz(self) -> dict[str, float]:
-        """Message name -> configured rate (Hz), for every message in :data:`RATE_FIELDS`."""
-        return {name: float(getattr(self, field)) for name, field in RATE_FIELDS.items()}
+        """Message name -> configured rate (Hz), for every message in :data:`RATE_FIELDS`.
+
+        A message with several senders (:data:`EXTRA_RATE_FIELDS`) gets the sum of their rates.
+        """
+        rates = {name: float(getattr(self, field)) for name, field in RATE_FIELDS.items()}
+        for name, fields in EXTRA_RATE_FIELDS.items():
+            rates[name] += sum(float(getattr(self, field)) for field in fields)
+        return rates

@@ -14,12 +14,17 @@ in place. Besides the samples it keeps:
   (``receive_own_messages=False``); never open the harness bus with it on;
 - E-stop frames: a valid frame with ``active=1`` latches :attr:`FrameReader.estop_requested`,
   and so does any malformed frame on the E-stop ID (fail-safe: a stop request
-  that arrives damaged is still a stop request). Only :meth:`FrameReader.clear_estop` clears it.
+  that arrives damaged is still a stop request). Only :meth:`FrameReader.clear_estop` clears it;
+- the E-stop panel's heartbeat: the panel (``source`` 3) sends ESTOP frames with ``active=0``
+  while not pressed; :meth:`FrameReader.panel_age` is the age of its newest frame that passed
+  every E2E check. The harness's own ESTOP frames (source 4, supervisor) are never received
+  back (no echo, as above), and the rig's (source 1) or the servo's (2) never count as the panel.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 
 import can
@@ -36,6 +41,12 @@ HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS"
 #: What the rig (servo controller and virtual rig) receives.
 RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP")
 ESTOP_MESSAGE = "ESTOP"
+#: ESTOP ``source`` of the operator panel (DBC: 0 harness, 1 rig, 2 servo, 3 panel, 4 supervisor).
+PANEL_SOURCE = 3
+#: How far in the future a frame's timestamp may lie before it is taken for another clock (s).
+FUTURE_TOLERANCE_S = 0.001
+#: Messages carrying the controller's measurements (x_0, xdot_0, y_b, ydot_b).
+CONTROL_MEASUREMENTS = ("TABLE_SENSORS", "BASE_SENSORS")
 
 
 class Sample:
@@ -69,7 +80,7 @@ class Sample:
         self._index = index
 
     def age(self, now: float) -> float:
-        """Seconds since the latest accepted frame; infinity when none arrived yet."""
+        """Seconds since the latest accepted frame; infinity when none arrived yet (NaN for an unusable timestamp)."""
         return now - self.rx_time if self.count else math.inf
 
     def index(self, signal: str) -> int:
@@ -97,19 +108,26 @@ class ReaderCounters:
         Frames on a foreign ID (the actuator command) not sent by this process.
     estop_frames : int
         Frames on the E-stop ID, valid or not.
-    last_foreign_time, last_estop_time : float
+    panel_frames : int
+        Intact ESTOP frames from the operator panel (source 3), pressed or not.
+    last_foreign_time, last_estop_time, last_panel_time : float
         Reader-clock time of the latest of each (s), NaN if none.
     """
 
-    __slots__ = ("frames", "polls_capped", "foreign_commands", "estop_frames", "last_foreign_time", "last_estop_time")
+    __slots__ = (
+        "frames", "polls_capped", "foreign_commands", "estop_frames", "panel_frames", "last_foreign_time",
+        "last_estop_time", "last_panel_time",
+    )
 
     def __init__(self) -> None:
         self.frames = 0
         self.polls_capped = 0
         self.foreign_commands = 0
         self.estop_frames = 0
+        self.panel_frames = 0
         self.last_foreign_time = math.nan
         self.last_estop_time = math.nan
+        self.last_panel_time = math.nan
 
 
 class FrameReader:
@@ -131,6 +149,9 @@ class FrameReader:
         Take the receive time from ``msg.timestamp`` instead of ``now``.
     max_frames : int
         Most frames one :meth:`poll` handles.
+    poison_on_invalid : sequence of str
+        Messages whose values turn NaN when an intact frame carries a value out of the DBC's
+        range (the control measurements): the harness must see the invalid value, not keep the last.
     """
 
     def __init__(
@@ -143,6 +164,7 @@ class FrameReader:
         health: BusHealth | None = None,
         use_msg_timestamp: bool = False,
         max_frames: int = 256,
+        poison_on_invalid: Sequence[str] = (),
     ):
         if max_frames < 1:
             raise ValueError(f"max_frames is {max_frames}; expected at least 1")
@@ -164,9 +186,11 @@ class FrameReader:
         self._by_name = {s.name: s for s in self._samples.values()}
         self._sample_list = tuple(self._samples.values())
         self._foreign_ids = frozenset(protocol[n].frame_id for n in foreign)
+        self._poison_ids = frozenset(protocol[n].frame_id for n in poison_on_invalid)
         estop = protocol.messages.get(ESTOP_MESSAGE)
         self._estop_id = estop.frame_id if estop is not None and ESTOP_MESSAGE in names else -1
         self._estop_active = estop.index("active") if estop is not None else 0
+        self._estop_source = estop.index("source") if estop is not None else 0
         self._estop_scratch = [0.0] * (len(estop.signals) if estop is not None else 0)
 
     def sample(self, name: str) -> Sample:
@@ -200,6 +224,14 @@ class FrameReader:
     def foreign_command_seen(self) -> bool:
         """True once any frame on a foreign ID arrived from another node."""
         return self.counters.foreign_commands > 0
+
+    def panel_age(self, now: float) -> float:
+        """Seconds since the newest intact ESTOP frame from the panel (source 3); infinity before the first.
+
+        NaN when a frame's timestamp was unusable (the staleness checks treat it as invalid).
+        """
+        counters = self.counters
+        return now - counters.last_panel_time if counters.panel_frames else math.inf
 
     def clear_estop(self) -> None:
         """Deliberately clear the latched E-stop request (the operator's reset)."""
@@ -245,11 +277,25 @@ class FrameReader:
             handled += 1
             if self.tap is not None:
                 self.tap(msg)
-            self._handle(msg, msg.timestamp if self.use_msg_timestamp else now)
+            self._handle(msg, self._message_time(msg.timestamp, now) if self.use_msg_timestamp else now)
         else:
             self.counters.polls_capped += 1
         self.counters.frames += handled
         return handled
+
+    @staticmethod
+    def _message_time(timestamp: float, now: float) -> float:
+        """A frame's own timestamp (wall-clock epoch s) moved onto the loop's clock (``now``).
+
+        The frame is as old as the wall clock says (``time.time() - timestamp``, at least 0),
+        counted back from ``now``. A timestamp more than :data:`FUTURE_TOLERANCE_S` in the
+        future is not on this host's wall clock: the time is NaN, which the staleness checks
+        treat as invalid (they trip).
+        """
+        delay = time.time() - timestamp
+        if not delay >= -FUTURE_TOLERANCE_S:
+            return math.nan
+        return now - max(delay, 0.0)
 
     def _handle(self, msg: can.Message, t: float) -> None:
         if msg.is_error_frame:
@@ -274,14 +320,33 @@ class FrameReader:
                 sample.rx_time = t
                 sample.count += 1
                 sample.fresh = True
+            elif status == RxStatus.OUT_OF_RANGE and frame_id in self._poison_ids:
+                self._poison(sample, t)
         if frame_id == self._estop_id and not extended:
             self._note_estop(status, msg.data, t)
+
+    @staticmethod
+    def _poison(sample: Sample, t: float) -> None:
+        """A frame that arrived intact (CRC, counter) with a value out of the DBC's range (or NaN).
+
+        Its values become NaN, fresh at ``t``: the measurement checks see an invalid value in the
+        same tick (``sensor_invalid``), rather than the previous values growing stale.
+        """
+        values = sample.values
+        for i in range(len(values)):
+            values[i] = math.nan
+        sample.rx_time = t
+        sample.fresh = True
 
     def _note_estop(self, status: RxStatus, data: bytearray, t: float) -> None:
         self.counters.estop_frames += 1
         self.counters.last_estop_time = t
         if status == RxStatus.OK:
-            active = self._samples[self._estop_id].values[self._estop_active]
+            values = self._samples[self._estop_id].values
+            active = values[self._estop_active]
+            if values[self._estop_source] == PANEL_SOURCE:
+                self.counters.panel_frames += 1
+                self.counters.last_panel_time = t
         elif status in (RxStatus.REPEATED_COUNTER, RxStatus.SKIPPED_COUNTER, RxStatus.OUT_OF_RANGE):
             codec = self.protocol.by_id[self._estop_id]
             codec.unpack(data, self._estop_scratch)  # CRC and length are fine here
@@ -308,6 +373,7 @@ class HarnessReader(FrameReader):
         super().__init__(
             bus, protocol, HARNESS_RX, foreign=("ACTUATOR_CMD",), health=health,
             use_msg_timestamp=config.timestamp_source == "message", max_frames=config.max_frames_per_poll,
+            poison_on_invalid=CONTROL_MEASUREMENTS,
         )
         self.table = self.sample("TABLE_SENSORS")
         self.base = self.sample("BASE_SENSORS")

@@ -1,22 +1,42 @@
 """The live console of a run (rich): state, progress, stroke against its limits, force, S, loop health.
 
-It reads a :class:`~harness.loop.runner.LoopStatus` that the loop overwrites in place;
-rich's own refresh thread draws it a few times a second, so the loop never waits for
-the terminal.
+The loop writes a :class:`~harness.loop.status.LoopStatus` (shared memory) every tick. On a
+terminal, :class:`LiveConsole` draws it from a child process (:mod:`harness.console_view`),
+never from a thread of the loop's process: one render holds the interpreter lock for
+milliseconds, which the loop would see as lateness. While the child draws, the loop's
+process prints nothing.
+
+Where the console is given and writes to something that is not a terminal (a file, a
+``StringIO`` in tests, a pipe), nothing is drawn live: the final panel is printed once, in
+process, when the run is over (as rich's ``Live`` did for such files).
 """
 
 from __future__ import annotations
 
-from rich.console import Console, Group
-from rich.live import Live
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rich.console import Console
 from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from harness.loop.runner import LoopStatus
-from harness.loop.timing import TimingStats
+from harness.loop.status import LoopStatus
+
+if TYPE_CHECKING:
+    from harness.loop.timing import TimingStats
 
 _STATE_STYLE = {"IDLE": "dim", "ARMED": "yellow", "RUNNING": "green", "STOPPING": "yellow", "DONE": "cyan", "TRIPPED": "bold red"}
+#: How long :meth:`LiveConsole.__exit__` waits for the child to draw its last frame and exit (s).
+CHILD_EXIT_TIMEOUT_S = 2.0
+#: The child's refresh rate (Hz).
+REFRESH_HZ = 4.0
+_PROJECT_ROOT = Path(__file__).resolve().parent.parent
 
 
 def stroke_bar(stroke_m: float, soft_m: float, hard_m: float, width: int = 41) -> Text:
@@ -33,72 +53,258 @@ def stroke_bar(stroke_m: float, soft_m: float, hard_m: float, width: int = 41) -
     return text
 
 
-class LiveConsole:
-    """Context manager showing a run's status until it ends.
+def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, force_limit_N: float, title: str,
+                 alerts: tuple[str, ...] = ()) -> Panel:
+    """The console's panel for the current contents of ``status``.
 
     Parameters
     ----------
     status : LoopStatus
-    timing : TimingStats, optional
-        For lateness percentiles (read by the refresh thread).
-    soft_limit_m, hard_limit_m, force_limit_N : float
-        For the bars.
+    soft_limit_m, hard_limit_m : float
+        Stroke limits (m).
+    force_limit_N : float
+        Force limit (N).
     title : str
+    alerts : tuple of str
+        Lines shown in red above everything else for the whole run, e.g. the safety
+        settings the command line weakened (harness/safety/weakening.py).
+    """
+    s = status
+    grid = Table.grid(padding=(0, 2))
+    grid.add_column(style="bold")
+    grid.add_column()
+    for alert in alerts:
+        grid.add_row(Text("WARNING", style="bold red"), Text(alert, style="bold red"))
+    state_name = s.state
+    state = Text(state_name, style=_STATE_STYLE.get(state_name, ""))
+    trip_reason = s.trip_reason
+    if trip_reason:
+        state.append(f"  ({trip_reason})", style="red")
+    grid.add_row("state", state)
+    run_t_s, duration_s = s.run_t_s, s.duration_s
+    done = 0.0 if duration_s <= 0 else min(1.0, run_t_s / duration_s)
+    grid.add_row("record", f"{run_t_s:6.1f} / {duration_s:.1f} s  ({done * 100:5.1f} %)")
+    stroke_m = s.stroke_m
+    stroke = stroke_bar(stroke_m, soft_limit_m, hard_limit_m)
+    stroke.append(f"  {stroke_m * 1e3:+7.2f} mm (soft {soft_limit_m * 1e3:.0f}, hard {hard_limit_m * 1e3:.0f})")
+    grid.add_row("stroke x_b", stroke)
+    force_N = s.force_N
+    force = stroke_bar(force_N, force_limit_N, force_limit_N)
+    force.append(f"  {force_N / 1e3:+7.3f} kN (limit {force_limit_N / 1e3:.1f})")
+    grid.add_row("force", force)
+    grid.add_row("sliding var. S", f"{s.sliding_variable * 1e3:+8.3f} mm/s")
+    p50, p99 = s.lateness_percentiles()
+    grid.add_row("loop lateness", f"p50 {p50 * 1e6:7.1f} us   p99 {p99 * 1e6:7.1f} us   overruns {s.overruns}")
+    grid.add_row("loop stalls", f"stalls ridden through {s.stalls}, longest {s.longest_stall_s * 1e3:.1f} ms, "
+                                f"missed periods {s.missed_periods}")
+    grid.add_row("frame errors", f"E2E rejects {s.e2e_rejects}   error frames {s.error_frames}   send failures {s.send_failures}")
+    grid.add_row("last event", Text(s.last_event or "-", overflow="ellipsis", no_wrap=True))
+    return Panel(grid, title=title, subtitle="Ctrl-C: safe stop   Ctrl-C twice: trip")
+
+
+def _terminal_fd(console: Console) -> int | None:
+    """The file descriptor ``console`` writes to, if it is a real terminal; else None."""
+    try:
+        fd = console.file.fileno()
+    except (AttributeError, OSError, ValueError):  # io.UnsupportedOperation is an OSError and a ValueError
+        return None
+    return fd if os.isatty(fd) else None
+
+
+def _output_fd(console: Console) -> int | None:
+    """The file descriptor ``console`` writes to (terminal or not); None if it has none."""
+    try:
+        return console.file.fileno()
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def _explicit_width(console: Console, fd: int) -> int | None:
+    """``console``'s width if it differs from what the child would find on ``fd`` (columns); else None.
+
+    A console following its terminal's width is left to the child, which then follows resizes too.
+    """
+    try:
+        columns = os.get_terminal_size(fd).columns
+    except OSError:
+        return console.width
+    return None if console.width == columns else console.width
+
+
+@contextlib.contextmanager
+def _sigint_blocked():
+    """Block SIGINT in this thread for the duration (a Ctrl-C meanwhile is delivered afterwards).
+
+    A child started meanwhile inherits the blocked mask through ``exec``, so it cannot be
+    interrupted before it has set SIGINT to be ignored (its first statement) and unblocked it.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def view_command(status_path: str, soft_limit_m: float, hard_limit_m: float, force_limit_N: float, title: str, *,
+                 parent_pid: int, fd: int = 1, width: int | None = None, color_system: str | None = None,
+                 force_terminal: bool | None = None, timing_out: str | None = None,
+                 alerts: tuple[str, ...] = ()) -> list[str]:
+    """The command line of the console's child process (:mod:`harness.console_view`).
+
+    Parameters
+    ----------
+    status_path : str
+        The status block's file.
+    soft_limit_m, hard_limit_m, force_limit_N : float
+        Limits for the bars (m, m, N).
+    title : str
+    parent_pid : int
+        The child exits (after a last frame) when its parent is no longer this process.
+    fd : int
+        File descriptor to draw on (inherited).
+    width : int, optional
+        Fixed width in columns; None follows the terminal.
+    color_system : str, optional
+        rich's colour system (``standard``, ``256``, ``truecolor``, ``windows``); None for no colour.
+    force_terminal : bool, optional
+        True draws as on a terminal (cursor movement) even if ``fd`` is not one, False as on a
+        file; None lets the child detect it.
+    timing_out : str, optional
+        Write the child's start-up and render timing (JSON) here when it exits.
+    alerts : tuple of str
+        Red lines of the panel (:func:`status_panel`).
+    """
+    command = [sys.executable, "-m", "harness.console_view", f"--status={status_path}",
+               f"--soft-limit-m={soft_limit_m!r}", f"--hard-limit-m={hard_limit_m!r}", f"--force-limit-n={force_limit_N!r}",
+               f"--title={title}", f"--parent-pid={parent_pid}", f"--fd={fd}", f"--color-system={color_system or 'none'}",
+               f"--refresh-hz={REFRESH_HZ!r}"]
+    if width is not None:
+        command.append(f"--width={width}")
+    if force_terminal is not None:
+        command.append("--force-terminal" if force_terminal else "--no-force-terminal")
+    if timing_out is not None:
+        command.append(f"--timing-out={timing_out}")
+    command += [f"--alert={alert}" for alert in alerts]
+    return command
+
+
+def view_environment() -> dict[str, str]:
+    """The child's environment: this one, with this checkout first on ``PYTHONPATH``."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(_PROJECT_ROOT), env.get("PYTHONPATH"))))
+    return env
+
+
+class LiveConsole:
+    """Context manager showing a run's status until it ends, drawn by a child process.
+
+    On entry, if enabled and the console is the default one or writes to a real terminal,
+    a child process (:mod:`harness.console_view`) attaches to the status block and draws
+    the panel at 4 Hz on the same terminal. On exit the status is marked finished, the
+    child draws its last frame and exits (killed after :data:`CHILD_EXIT_TIMEOUT_S`), and
+    the status block is closed: **the LiveConsole owns the block for the run** and closes
+    it in ``__exit__`` whether enabled or not (the status stays readable afterwards).
+
+    A given console that does not write to a terminal gets no live display: the final
+    panel is printed into it once, at exit. If the child cannot be started, one plain line
+    says so and nothing is drawn live (never in process: that would disturb the loop).
+
+    Parameters
+    ----------
+    status : LoopStatus
+    soft_limit_m, hard_limit_m, force_limit_N : float
+        For the bars (m, m, N).
+    title : str
+    timing : TimingStats, optional
+        Accepted for compatibility; unused (the lateness percentiles come from the status's ring).
     console : Console, optional
+        Where to draw; the default Console (standard output) if None.
     enabled : bool
-        False prints nothing (tests, --quiet).
+        False shows nothing (tests, --quiet).
+    alerts : tuple of str
+        Red lines shown on the panel for the whole run (the safety settings the command line weakened).
     """
 
     def __init__(self, status: LoopStatus, soft_limit_m: float, hard_limit_m: float, force_limit_N: float,
-                 title: str, timing: TimingStats | None = None, console: Console | None = None, enabled: bool = True):
+                 title: str, timing: TimingStats | None = None, console: Console | None = None, enabled: bool = True,
+                 alerts: tuple[str, ...] = ()):
         self.status = status
+        self.alerts = tuple(alerts)
         self.timing = timing
         self.soft, self.hard, self.force_limit = soft_limit_m, hard_limit_m, force_limit_N
         self.title = title
+        self.console_given = console is not None
         self.console = console or Console()
         self.enabled = enabled
-        self._live: Live | None = None
+        #: The child process drawing the panel, while it runs.
+        self.child: subprocess.Popen | None = None
+        self._print_final_panel = False
 
     def __rich__(self) -> Panel:
-        s = self.status
-        grid = Table.grid(padding=(0, 2))
-        grid.add_column(style="bold")
-        grid.add_column()
-        style = _STATE_STYLE.get(s.state, "")
-        state = Text(s.state, style=style)
-        if s.trip_reason:
-            state.append(f"  ({s.trip_reason})", style="red")
-        grid.add_row("state", state)
-        done = 0.0 if s.duration_s <= 0 else min(1.0, s.run_t_s / s.duration_s)
-        grid.add_row("record", f"{s.run_t_s:6.1f} / {s.duration_s:.1f} s  ({done * 100:5.1f} %)")
-        stroke = stroke_bar(s.stroke_m, self.soft, self.hard)
-        stroke.append(f"  {s.stroke_m * 1e3:+7.2f} mm (soft {self.soft * 1e3:.0f}, hard {self.hard * 1e3:.0f})")
-        grid.add_row("stroke x_b", stroke)
-        force = stroke_bar(s.force_N, self.force_limit, self.force_limit)
-        force.append(f"  {s.force_N / 1e3:+7.3f} kN (limit {self.force_limit / 1e3:.1f})")
-        grid.add_row("force", force)
-        grid.add_row("sliding var. S", f"{s.sliding_variable * 1e3:+8.3f} mm/s")
-        p50 = p99 = 0.0
-        if self.timing is not None:
-            p50, p99 = self.timing.recent_percentiles()
-        grid.add_row("loop lateness", f"p50 {p50 * 1e6:7.1f} us   p99 {p99 * 1e6:7.1f} us   overruns {s.overruns}")
-        grid.add_row("frame errors", f"E2E rejects {s.e2e_rejects}   error frames {s.error_frames}   send failures {s.send_failures}")
-        grid.add_row("last event", Text(s.last_event or "-", overflow="ellipsis", no_wrap=True))
-        return Panel(grid, title=self.title, subtitle="Ctrl-C: safe stop   Ctrl-C twice: trip")
+        return status_panel(self.status, self.soft, self.hard, self.force_limit, self.title, self.alerts)
+
+    def wants_child(self) -> bool:
+        """Whether the panel is drawn live by a child: enabled, and the default console or a terminal."""
+        if not self.enabled:
+            return False
+        fd = _output_fd(self.console) if not self.console_given else _terminal_fd(self.console)
+        return fd is not None
 
     def __enter__(self) -> "LiveConsole":
-        if self.enabled:
-            self._live = Live(self, console=self.console, refresh_per_second=4, transient=False)
-            self._live.__enter__()
+        if not self.enabled:
+            return self
+        if self.wants_child():
+            self.child = self._start_child()
+        else:
+            self._print_final_panel = True
         return self
 
+    def _start_child(self) -> subprocess.Popen | None:
+        """Start the drawing child on the console's file descriptor; None (and one line) if it cannot start."""
+        console = self.console
+        fd = _output_fd(console)
+        command = view_command(
+            self.status.path, self.soft, self.hard, self.force_limit, self.title, parent_pid=os.getpid(), fd=fd,
+            width=_explicit_width(console, fd), color_system=console.color_system, force_terminal=console.is_terminal,
+            alerts=self.alerts,
+        )
+        try:
+            console.file.flush()
+            with _sigint_blocked():
+                return subprocess.Popen(
+                    command, stdin=subprocess.DEVNULL, stdout=None, stderr=None, pass_fds=(fd,) if fd > 2 else (),
+                    start_new_session=False, env=view_environment(),
+                )
+        except (OSError, ValueError, subprocess.SubprocessError) as err:
+            console.print(f"live console unavailable ({err}); the run goes on without it", markup=False, highlight=False)
+            return None
+
     def __exit__(self, *exc) -> None:
-        if self._live is not None:
-            self._live.refresh()
-            self._live.__exit__(*exc)
-            self._live = None
+        try:
+            self.status.finished = True
+            if self.child is not None:
+                self._stop_child()
+            elif self._print_final_panel:
+                self.console.print(self)
+        finally:
+            self.status.close()
 
-
-def render_once(console: LiveConsole) -> Group:
-    """The panel as a renderable (for tests and final summaries)."""
-    return Group(console.__rich__())
+    def _stop_child(self) -> None:
+        """Wait for the child's last frame; kill it after the timeout; print the panel here if it died early."""
+        child, self.child = self.child, None
+        try:
+            code = child.wait(timeout=CHILD_EXIT_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+            self.console.show_cursor(True)
+            self.console.print(f"live console did not finish within {CHILD_EXIT_TIMEOUT_S:g} s; stopped it",
+                               markup=False, highlight=False)
+            return
+        if code != 0:
+            self.console.show_cursor(True)
+            self.console.print(f"live console exited early (status {code}); the final status:", markup=False, highlight=False)
+            self.console.print(self)

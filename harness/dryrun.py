@@ -1,8 +1,12 @@
 """``harness dry-run``: the whole test against the virtual rig, over CAN, with the real loop.
 
-On python-can's in-process ``virtual`` bus the rig runs in a thread of this process; on a
-real channel (``socketcan``/``vcan0``) it runs as a separate ``harness rig`` process, which
-this command starts unless ``--external-rig`` says one is already running. Afterwards the
+By default the rig runs as a separate ``harness rig`` process, as on a real channel
+(``socketcan``/``vcan0``): the loop's process then holds nothing but the loop, so no other
+thread takes the interpreter lock from it. The default bus is the ``seqpacket`` interface
+(drivers/seqpacket.py), a Unix-socket bus private to this dry run that needs no set-up.
+The command starts the rig unless ``--external-rig`` says one is already running. On
+python-can's in-process ``virtual`` bus (``--interface virtual``) the rig runs in a thread
+of this process instead (fine in lockstep; in real time it competes with the loop). Afterwards the
 dry run's peaks are printed beside the simulated passive reference, and compared with
 ``harness simulate --rig-effects``: the same rig models (sensors, actuator, safety)
 simulated offline.
@@ -10,6 +14,8 @@ simulated offline.
 
 from __future__ import annotations
 
+import dataclasses
+import os
 import subprocess
 import sys
 import time
@@ -20,12 +26,17 @@ from harness.errors import BusError
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
 from harness.profile import Profile
+from harness.record import load_run
 from harness.session import SessionResult, SessionSettings, run_peaks, run_session
 from harness.simulation import CaseResult, SamplingSettings, run_case
 from harness.study import StudyOptions, make_controller, motion_facts, prepare_motion
 from harness.twin import run_rig_twin
 
 RIG_START = 1  # RIG_CONTROL command: start table
+RIG_STOP = 2  # RIG_CONTROL command: stop table
+#: The python-can interface (drivers/seqpacket.py) of the default dry run: the rig runs in its own
+#: process, on a Unix-socket bus that needs no set-up.
+PRIVATE_BUS_INTERFACE = "seqpacket"
 RIG_APPEAR_TIMEOUT_S = 60.0
 IN_PROCESS_SWITCH_INTERVAL_S = 2e-4
 LOG_DIR = Path(__file__).resolve().parent.parent / "logs"
@@ -56,6 +67,7 @@ class DryRunResult:
     passive: CaseResult | None
     twin: CaseResult | None
     motion: object
+    span_s: float | None = None  # record time covered by a run that ended early (s); None: the whole record
 
 
 def _rig_process(profile: Profile, options: DryRunOptions, can, rate_hz: float) -> subprocess.Popen:
@@ -70,13 +82,18 @@ def _rig_process(profile: Profile, options: DryRunOptions, can, rate_hz: float) 
         args += ["--variant", profile.variant]
     for item in options.overrides:  # the rig must run the same profile as the harness
         args += ["--set", item]
+    if profile.safety_weakened:  # acknowledged already (harness/cli.py refuses it otherwise)
+        args.append("--allow-weaker-safety")
     if options.lockstep:
         args.append("--lockstep")
-    return subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    args += ["--parent-pid", str(os.getpid())]
+    # Its own session: the terminal's Ctrl-C goes to the loop, which stops safely, not to the rig.
+    return subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            start_new_session=True)
 
 
 class RigCoordinator:
-    """The harness side's dealings with the virtual rig: wait for it, lockstep, start the table.
+    """The harness side's dealings with the virtual rig: wait for it, lockstep, start and stop the table.
 
     Parameters
     ----------
@@ -128,6 +145,10 @@ class RigCoordinator:
         """RUNNING begins: start the table."""
         self.link.writer.rig_control(RIG_START, self.lockstep, t)
 
+    def stop_table(self, now: float) -> bool:
+        """Stop the table (the ``stop_table`` trip action): RIG_CONTROL stop, lockstep flag kept."""
+        return self.link.writer.rig_control(RIG_STOP, self.lockstep, now)
+
     def lockstep_wait(self, tick):
         """The loop's lockstep wait: poll until the rig reports step ``base + k``."""
         reader = tick.reader
@@ -148,24 +169,40 @@ class RigCoordinator:
         return wait
 
 
-def simulated_twins(profile: Profile, motion, rate_hz: float, controller: str, lockstep: bool) -> tuple[CaseResult, CaseResult]:
+def simulated_twins(
+    profile: Profile, motion, rate_hz: float, controller: str, lockstep: bool, span_s: float | None = None,
+) -> tuple[CaseResult, CaseResult]:
     """The passive reference and the controlled rig twin of a dry run, simulated offline.
 
     The twin runs the rig's own sensor, actuator and safety models; a real-time dry run
     adds on average one period of delay (frames sampled up to a period old, commands
     applied up to a period late); in lockstep there is none, and sensor delays are
-    rounded to whole steps as the rig does.
+    rounded to whole steps as the rig does. ``span_s`` limits both to the record time a
+    run that ended early covered (s), so peaks are compared over the same span.
     """
+    duration_s = motion.duration_s if span_s is None else max(min(span_s, motion.duration_s), 1.0 / rate_hz)
     table = TableMotion.from_motion(motion)
     plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
-    passive = run_case("passive", plant, motion.duration_s, SamplingSettings(rate_hz))
+    passive = run_case("passive", plant, duration_s, SamplingSettings(rate_hz))
     delay = 0.0 if lockstep else 1.0 / rate_hz
     twin = run_rig_twin(profile, motion, rate_hz, make_controller(profile, controller), asynchronous_delay_s=delay,
-                        lockstep=lockstep)
+                        lockstep=lockstep, duration_s=duration_s)
     return passive, twin
 
 
-def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunResult:
+def record_span_s(session: SessionResult, motion) -> float | None:
+    """Record time a run that ended early covered (s); None when it ran the whole record."""
+    if session.outcome == "completed":
+        return None
+    start = session.loop.record_start_t_s
+    if start is None:
+        return 0.0
+    data = load_run(session.run_path)
+    span = float(data["t_s"][-1]) - start
+    return span if span < motion.duration_s else None
+
+
+def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timing=None) -> DryRunResult:
     """Run a dry run; see the module docstring."""
     from drivers.link import open_rig
     from harness.rig import VirtualRig
@@ -174,6 +211,9 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
     motion = prepare_motion(profile, options.study)
     rate_hz = options.rate_hz or profile.loop.rate_hz
     can = profile.can_settings(options.interface, options.channel, rate_hz)
+    if can.interface == PRIVATE_BUS_INTERFACE and not options.external_rig:
+        # a private bus per dry run: two dry runs at once (or a test suite) never meet
+        can = dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}")
     controller = options.study.controller or profile.control.controller
     settings = SessionSettings(
         kind="dry-run", can=can, rate_hz=rate_hz, duration_s=motion.duration_s, controller=controller,
@@ -197,7 +237,8 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
         session = run_session(
             profile, settings, on_start=coordinator.on_start,
             make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
-            on_link=coordinator.on_link, console=console,
+            on_link=coordinator.on_link, on_host_timing=on_host_timing, console=console,
+            stop_table=coordinator.stop_table,
         )
     finally:
         sys.setswitchinterval(switch_interval)
@@ -209,9 +250,10 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None) -> DryRunRes
             _stop_process(process)
     peaks = run_peaks(session.run_path, profile.structure.total_weight_N)
     passive = twin = None
+    span = record_span_s(session, motion)
     if options.compare:
-        passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep)
-    return DryRunResult(session, peaks, passive, twin, motion)
+        passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep, span)
+    return DryRunResult(session, peaks, passive, twin, motion, span)
 
 
 def _stop_process(process: subprocess.Popen) -> None:

@@ -10,7 +10,14 @@ safety limits and the loop. Rules:
   overrides it key by key (mappings merge, everything else replaces), so an
   experiment profile can name its rig profile;
 - ``variants: {name: {...overrides...}}`` are named overlays chosen with ``--variant``;
-  every variant is validated on load.
+  every variant is validated on load;
+- ``--set KEY.PATH=VALUE`` overrides go last, over a variant too. Safety settings they make
+  weaker than the profile's own (file, extends, variant) are listed in
+  ``Profile.safety_weakened`` (:mod:`harness.safety.weakening`); the command line refuses them
+  without ``--allow-weaker-safety``;
+- ``safety.force.max_force_N`` may not exceed what the DBC's ACTUATOR_CMD ``force`` signal
+  carries, ``rig.actuator.force_limit_N``, or ``safety.force.actuator_rating_N`` when given,
+  whatever the flag.
 
 Any problem raises :class:`~harness.errors.ProfileError` naming the file, the key path,
 what was found and what was expected.
@@ -20,6 +27,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,7 +44,9 @@ from harness.model.building import BuildingConfig
 from harness.records import RecordConfig, TableLimits
 from harness.rig.config import RigConfig
 from harness.safety.config import SafetyConfig, check_config
+from harness.safety.weakening import Weakening, weakenings
 from harness.schema import build, internal, quantity, to_data
+from harness.yamlload import DuplicateKeyError, load_unique
 
 PROFILE_DIR = Path(__file__).resolve().parent.parent / "profiles"
 DEFAULT_PROFILE = PROFILE_DIR / "nceer_4dof.yaml"
@@ -62,6 +72,9 @@ class Profile:
     variants: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     source_path: str = internal("", "the file this profile was loaded from")
     variant: str = internal("", "the variant applied, if any")
+    safety_weakened: tuple[Weakening, ...] = internal(
+        (), "safety settings --set made weaker than the profile's own (harness/safety/weakening.py)"
+    )
 
     def __post_init__(self) -> None:
         problems = check_config(self.safety)
@@ -71,6 +84,13 @@ class Profile:
             raise ValueError(
                 f"loop.rate_hz is {self.loop.rate_hz:g} Hz but can.command_rate_hz is {self.can.command_rate_hz:g} Hz; "
                 "the actuator command is sent once per tick, so they must be equal"
+            )
+        panel_period_s = 1.0 / self.can.estop_panel_rate_hz
+        if self.safety.estop.panel_required and self.safety.estop.max_panel_age_s < 2.0 * panel_period_s:
+            raise ValueError(
+                f"safety.estop.max_panel_age_s ({self.safety.estop.max_panel_age_s:g} s) is shorter than two periods of "
+                f"the panel heartbeat, 2 / can.estop_panel_rate_hz = {2.0 * panel_period_s:g} s: a healthy panel would "
+                "trip estop_lost (docs/SAFETY.md, E-stop panel liveness)"
             )
 
     @property
@@ -103,16 +123,23 @@ def _read_yaml(path: Path) -> dict:
     source = str(path)
     if not path.is_file():
         known = ", ".join(sorted(p.name for p in PROFILE_DIR.glob("*.yaml")))
-        raise ProfileError(f"profile file not found; expected an existing YAML file (shipped profiles: {known})", source)
-    raw = path.read_bytes()
-    if len(raw) > _MAX_FILE_BYTES:
-        raise ProfileError(f"file is {len(raw)} bytes; expected a profile under {_MAX_FILE_BYTES} bytes", source)
+        state = "is a directory" if path.is_dir() else "profile file not found"
+        raise ProfileError(f"{state}; expected an existing YAML file (shipped profiles: {known})", source)
+    try:
+        size = path.stat().st_size
+        if size > _MAX_FILE_BYTES:
+            raise ProfileError(f"file is {size} bytes; expected a profile under {_MAX_FILE_BYTES} bytes", source)
+        raw = path.read_bytes()
+    except OSError as err:
+        raise ProfileError(f"cannot read it ({err.strerror or err}); expected a readable YAML file", source) from err
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as err:
         raise ProfileError(f"not UTF-8 text (byte {err.start}); expected a YAML profile", source) from err
     try:
-        data = yaml.safe_load(text)
+        data = load_unique(text)
+    except DuplicateKeyError as err:
+        raise ProfileError(err.describe(), source) from err
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
@@ -164,30 +191,48 @@ def _apply_variant(data: dict, variant: str, source: str) -> dict:
 
 
 def parse_overrides(items: list[str] | tuple[str, ...]) -> dict:
-    """``["safety.stroke.hard_limit_m=0.02", ...]`` -> a nested mapping (values parsed as YAML scalars).
+    """``["safety.stroke.hard_limit_m=0.02", ...]`` -> a nested mapping (values parsed as YAML).
 
     Raises
     ------
     ProfileError
-        For an item without ``=`` or with an empty key.
+        For an item without ``=`` or with an empty key, a value that is not valid YAML or
+        repeats a key inside it, and a key set twice (or set and also set inside, as
+        ``safety.stroke=...`` with ``safety.stroke.hard_limit_m=...``): the later one would
+        silently replace the earlier.
     """
     result: dict = {}
+    given: dict[tuple[str, ...], str] = {}
     for item in items:
         key, sep, text = item.partition("=")
-        if not sep or not key.strip() or any(not part for part in key.strip().split(".")):
+        if not sep or not key.strip() or any(not part.strip() for part in key.strip().split(".")):
             raise ProfileError(f"override {item!r}: expected KEY.PATH=VALUE, e.g. safety.stroke.hard_limit_m=0.02", "--set")
         try:
-            value = yaml.safe_load(text) if text.strip() else ""
+            value = load_unique(text) if text.strip() else ""
+        except DuplicateKeyError as err:
+            raise ProfileError(f"override {item!r}: in the value, {err.describe()}", "--set") from err
         except yaml.YAMLError as err:
-            raise ProfileError(f"override {item!r}: the value is not valid YAML ({err})", "--set") from err
+            problem = getattr(err, "problem", None) or str(err).splitlines()[0]
+            raise ProfileError(f"override {item!r}: the value is not valid YAML ({problem})", "--set") from err
+        parts = tuple(part.strip() for part in key.strip().split("."))
+        clash = next((earlier for path, earlier in given.items() if _overlaps(path, parts)), None)
+        if clash is not None:
+            raise ProfileError(
+                f"override {item!r} sets {'.'.join(parts)} again after {clash!r}; expected each key once "
+                "(the later value would silently replace the earlier)", "--set",
+            )
+        given[parts] = item
         node = result
-        parts = key.strip().split(".")
         for part in parts[:-1]:
             node = node.setdefault(part, {})
-            if not isinstance(node, dict):
-                raise ProfileError(f"override {item!r} conflicts with another override of {part}", "--set")
         node[parts[-1]] = value
     return result
+
+
+def _overlaps(a: tuple[str, ...], b: tuple[str, ...]) -> bool:
+    """True if one key path is the other or lies inside it."""
+    n = min(len(a), len(b))
+    return a[:n] == b[:n]
 
 
 def load_profile(
@@ -202,22 +247,91 @@ def load_profile(
     variant : str, optional
         Name of an entry of ``variants`` to apply.
     overrides : sequence of str
-        ``KEY.PATH=VALUE`` items applied last (the command line's ``--set``); validated like the file.
+        ``KEY.PATH=VALUE`` items applied last, over the variant too (the command line's ``--set``);
+        validated like the file.
+
+    Returns
+    -------
+    Profile
+        With ``safety_weakened``: the safety settings the overrides made weaker than the
+        profile's own values (file, extends and variant), for the caller to refuse or record.
 
     Raises
     ------
     ProfileError
+        For anything invalid, including a ``safety.force.max_force_N`` beyond the DBC's
+        ACTUATOR_CMD force range or an actuator rating.
+    ProtocolError
+        If the DBC (``can.dbc_path``) cannot be read.
     """
     file = Path(path) if path is not None else DEFAULT_PROFILE
     source = str(file)
     data = _resolve_extends(file)
+    own = _own_safety(data, variant, source) if overrides else None
+    changes = parse_overrides(overrides) if overrides else {}
     if overrides:
-        data = merge(data, parse_overrides(overrides))
+        data = merge(data, changes)
         source = f"{source} (with --set {' '.join(overrides)})"
-    profile = build(Profile, data, source=source)
+    profile = _build_checked(data, source)
     for name in profile.variants:  # every variant must give a valid profile
         if name != variant:
-            build(Profile, _apply_variant(data, name, source), source=f"{source} (variant {name})")
-    if variant:
-        profile = build(Profile, _apply_variant(data, variant, source), source=f"{source} (variant {variant})")
-    return dataclasses.replace(profile, source_path=str(file.resolve()), variant=variant or "")
+            _build_checked(merge(_apply_variant(data, name, source), changes), f"{source} (variant {name})")
+    if variant:  # --set goes last, over the variant too
+        profile = _build_checked(merge(_apply_variant(data, variant, source), changes), f"{source} (variant {variant})")
+    weakened = weakenings(own, profile.safety) if own is not None else ()
+    return dataclasses.replace(profile, source_path=str(file.resolve()), variant=variant or "", safety_weakened=weakened)
+
+
+def _own_safety(data: dict, variant: str | None, source: str) -> SafetyConfig:
+    """The profile's own safety section: its file (with what it extends) and the variant, before ``--set``.
+
+    A variant is written in the profile's file, so it is the profile's own choice; only the
+    command line's ``--set`` is compared with this (:mod:`harness.safety.weakening`).
+    """
+    chosen = _apply_variant(data, variant, source) if variant else data
+    return build(SafetyConfig, chosen.get("safety"), source=source, path="safety")
+
+
+def _build_checked(data: dict, source: str) -> Profile:
+    """Build a profile and refuse a force limit its protocol or its actuator cannot carry."""
+    profile = build(Profile, data, source=source)
+    max_force_N = profile.safety.force.max_force_N
+    for ceiling_N, what in _force_ceilings(profile):
+        if max_force_N > ceiling_N:
+            raise ProfileError(f"found {max_force_N:g} N, expected at most {ceiling_N:g} N ({what})",
+                               source, "safety.force.max_force_N")
+    return profile
+
+
+def _force_ceilings(profile: Profile) -> list[tuple[float, str]]:
+    """(largest allowed max_force_N in N, why) for the protocol and each actuator rating the profile declares."""
+    dbc = profile.can.dbc_path or "drivers/rig.dbc"
+    ceilings = [
+        (command_force_limit_N(profile.can.dbc_path), f"the range of the ACTUATOR_CMD force signal of {dbc}"),
+        (profile.rig.actuator.force_limit_N, "rig.actuator.force_limit_N, the virtual rig actuator's rating"),
+    ]
+    rating_N = profile.safety.force.actuator_rating_N
+    if rating_N is not None:
+        ceilings.append((rating_N, "safety.force.actuator_rating_N, the rig actuator's rating"))
+    return ceilings
+
+
+@functools.lru_cache(maxsize=8)
+def command_force_limit_N(dbc_path: str = "") -> float:
+    """Largest |force| (N) the ACTUATOR_CMD ``force`` signal of the DBC carries, both signs.
+
+    Parameters
+    ----------
+    dbc_path : str
+        The DBC (``can.dbc_path``); empty means the packaged ``drivers/rig.dbc``.
+
+    Raises
+    ------
+    ProtocolError
+        If the DBC cannot be read or has no such message or signal.
+    """
+    from drivers.codec import load_protocol
+
+    codec = load_protocol(dbc_path or None)["ACTUATOR_CMD"]
+    signal = codec.signals[codec.index("force")]
+    return min(-signal.minimum, signal.maximum)

@@ -32,7 +32,7 @@ _MAX_SENSOR_DELAY_S = 1.0
 
 def run_rig_twin(
     profile: Profile, motion, rate_hz: float, controller, seed: int | None = None, asynchronous_delay_s: float = 0.0,
-    story_rate_hz: float | None = None, lockstep: bool = False,
+    story_rate_hz: float | None = None, lockstep: bool = False, duration_s: float | None = None,
 ) -> CaseResult:
     """Simulate the controlled case through the rig's sensor, actuator and safety models.
 
@@ -56,6 +56,9 @@ def run_rig_twin(
         Rate of the story sensors (drifts, floor accelerations); default the profile's CAN rate.
     lockstep : bool
         Round sensor delays to whole controller steps, as the rig does in lockstep.
+    duration_s : float, optional
+        Simulate only this much of the record (s), e.g. the span a tripped dry run ran;
+        default the whole record.
 
     Returns
     -------
@@ -77,7 +80,7 @@ def run_rig_twin(
     sensors.set_delays(asynchronous_delay_s, n_sub if lockstep else None)
     actuator = ServoActuator(rig.actuator, h, rig.drive.decay_time_constant_s)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
-    supervisor = Supervisor(profile.safety)
+    supervisor = Supervisor(profile.safety, period_s=period)
     health = TickHealth()
     meas = health.meas
     truth = np.zeros(len(SIGNALS))
@@ -87,7 +90,8 @@ def run_rig_twin(
     controller.reset()
     supervisor.arm(0.0, health)
     supervisor.start(0.0)
-    n_samples = int(round(motion.duration_s * rate_hz))
+    span_s = motion.duration_s if duration_s is None else min(duration_s, motion.duration_s)
+    n_samples = int(round(span_s * rate_hz))
     states = np.zeros((n_samples + 1, table.y.size))
     applied, raw_force, command_force = (np.zeros(n_samples + 1) for _ in range(3))
     sliding_variable, friction_estimate = np.zeros(n_samples + 1), np.zeros(n_samples + 1)

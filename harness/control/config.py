@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from harness.control.designs import ControllerDesign
+from harness.input_limits import MAX_DELAY_S, MAX_RATE_HZ, MAX_STIFFNESS_SCALE, MIN_STIFFNESS_SCALE
 from harness.schema import quantity
 
 
@@ -16,10 +17,15 @@ class ControlConfig:
 
     controller: str = quantity(doc="name of the design used by default (a key of designs)")
     designs: Mapping[str, ControllerDesign] = quantity(doc="named controller designs")
-    rate_hz: float = quantity(500.0, unit="Hz", gt=0, doc="controller sample rate f_s")
-    transport_delay_s: float = quantity(0.0, unit="s", ge=0, doc="further sensor-to-force delay in simulation")
+    # Bounds shared with the command line; harness/input_limits.py gives the reasons.
+    rate_hz: float = quantity(500.0, unit="Hz", gt=0, le=MAX_RATE_HZ, doc="controller sample rate f_s")
+    transport_delay_s: float = quantity(
+        0.0, unit="s", ge=0, le=MAX_DELAY_S, doc="further sensor-to-force delay in simulation"
+    )
     friction: Literal["estimator", "model"] = "estimator"
-    design_stiffness_scale: float = quantity(1.0, gt=0, doc="story stiffness of the controller's model / plant's")
+    design_stiffness_scale: float = quantity(
+        1.0, ge=MIN_STIFFNESS_SCALE, le=MAX_STIFFNESS_SCALE, doc="story stiffness of the controller's model / plant's"
+    )
 
     def __post_init__(self) -> None:
         if not self.designs:

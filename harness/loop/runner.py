@@ -10,6 +10,7 @@ as ``k * period`` once the rig reports step ``k``.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -19,11 +20,14 @@ from harness.loop.config import LoopConfig
 from harness.loop.operator import OperatorSignals
 from harness.loop.realtime import apply_realtime, restore_realtime
 from harness.loop.scheduler import FixedRateScheduler
+from harness.loop.status import LoopStatus  # re-exported: it lived here before
 from harness.loop.tick import ControlTick
 from harness.loop.timing import TimingStats
 from harness.safety.lifecycle import State
 
 _FINAL = (State.DONE, State.TRIPPED)
+#: Longest wait for the table controller's RIG_STATUS ``table_running`` after RIG_CONTROL start (s).
+TABLE_START_TIMEOUT_S = 2.0
 
 
 class ArmTimeout(SafetyError):
@@ -35,31 +39,12 @@ class ArmTimeout(SafetyError):
 
 
 @dataclass
-class LoopStatus:
-    """What the live console shows; the loop overwrites the fields in place every tick."""
-
-    phase: str = "starting"
-    state: str = "IDLE"
-    t_s: float = 0.0
-    run_t_s: float = 0.0
-    duration_s: float = 0.0
-    stroke_m: float = 0.0
-    force_N: float = 0.0
-    sliding_variable: float = 0.0
-    overruns: int = 0
-    e2e_rejects: int = 0
-    error_frames: int = 0
-    send_failures: int = 0
-    last_event: str = ""
-    trip_reason: str = ""
-
-
-@dataclass
 class LoopResult:
     """How the run ended and its timing."""
 
     outcome: str
     trip_reason: str = ""
+    trip_detail: str = ""
     timing: dict = field(default_factory=dict)
     realtime_report: list[str] = field(default_factory=list)
     operator_stopped: bool = False
@@ -86,6 +71,13 @@ class ControlLoop:
         Updated every tick for a console.
     clock : callable
         Monotonic clock for the real-time scheduler.
+    sleep : callable
+        Its sleep function (tests pass a fake clock's).
+    table_running : callable, optional
+        ``table_running() -> bool``: the table controller reports that the table runs (RIG_STATUS,
+        ``table.link: can``). Record time then counts from the first RUNNING tick that sees it; a
+        table that does not report running within :data:`TABLE_START_TIMEOUT_S` stops the run
+        safely. None: record time counts from RUNNING (the harness's own clock).
     """
 
     def __init__(
@@ -98,8 +90,12 @@ class ControlLoop:
         on_start: Callable[[float], None] | None = None,
         status: LoopStatus | None = None,
         clock: Callable[[], float] = time.perf_counter,
+        sleep: Callable[[float], None] = time.sleep,
+        table_running: Callable[[], bool] | None = None,
     ):
         self.tick = tick
+        self.table_running = table_running
+        self._awaiting_table = False
         self.config = config
         self.period_s = 1.0 / rate_hz
         self.duration_s = float(duration_s)
@@ -108,8 +104,14 @@ class ControlLoop:
         self.lockstep = lockstep
         self.on_start = on_start or (lambda t: None)
         self.status = status or LoopStatus()
-        self.scheduler = FixedRateScheduler(self.period_s, config.spin_s, clock=clock)
+        self.scheduler = FixedRateScheduler(self.period_s, config.spin_s, clock=clock, sleep=sleep)
         self.signals = OperatorSignals()
+        #: Stalls ridden through (the loop went longer than 1.5 periods without a tick, within the budget).
+        self.stalls = 0
+        #: Longest time between two consecutive ticks' commands so far (s).
+        self.longest_stall_s = 0.0
+        #: The stall budget (s): ridden through up to here, tripped beyond (the supervisor's ``loop_stall``).
+        self.max_stall_s = tick.supervisor.config.run.max_stall_s
 
     def _phase(self, t: float, run_started: float | None, duration_s: float, armed_at: float | None):
         """Advance the phases after a tick; returns (run_started, armed_at, finished)."""
@@ -127,19 +129,63 @@ class ControlLoop:
         elif state is State.ARMED and t - armed_at >= self.config.settle_s:
             supervisor.start(t)
             run_started = t
+            self._awaiting_table = self.table_running is not None
             self.on_start(t)
+        elif state is State.RUNNING and self._awaiting_table:
+            run_started = self._await_table(t, run_started)
         elif state is State.RUNNING and t - run_started >= duration_s + self.config.tail_s:
             supervisor.stop(t, "record finished")
         return run_started, armed_at, state in _FINAL
+
+    def _await_table(self, t: float, started: float) -> float:
+        """RUNNING, table started: record time begins when the table controller reports running.
+
+        Returns the loop time (s) record time counts from: ``t`` once the table runs; until then
+        the time RUNNING began, and a safe stop if the table has not reported running within
+        :data:`TABLE_START_TIMEOUT_S`.
+        """
+        if self.table_running():
+            self._awaiting_table = False
+            return t
+        if t - started >= TABLE_START_TIMEOUT_S:
+            self._awaiting_table = False
+            self.tick.supervisor.stop(
+                t, f"the table controller did not report RIG_STATUS table_running within {TABLE_START_TIMEOUT_S:g} s "
+                "of RIG_CONTROL start (table.link: can)",
+            )
+        return started
 
     def _wait(self, k: int) -> tuple[float, float]:
         """Wait for tick ``k``; return (t, lateness)."""
         if self.lockstep is None:
             t = self.scheduler.wait()
             return t, self.scheduler.lateness_s
-        if not self.lockstep(k, self.config.lockstep_timeout_s):
+        # once the rig stopped answering, the closing ticks do not wait for it again
+        timeout_s = 0.0 if self.tick.health.bus_gone else self.config.lockstep_timeout_s
+        if not self.lockstep(k, timeout_s):
             self.tick.health.bus_gone = True  # the rig stopped answering: trips as bus_gone
         return k * self.period_s, 0.0
+
+    def _note_stall(self, t: float, stall_s: float) -> int:
+        """Count a stall the loop rides through; return the whole periods missed in it.
+
+        A stall is a gap of two periods or more between the starts of two ticks (one or more
+        deadlines passed without a tick). Beyond the budget the supervisor trips
+        (``loop_stall``); within it the stall is counted, shown on the console and recorded
+        as a ``timing`` event. In lockstep (``stall_s`` 0) the rig waits for the loop.
+        """
+        missed = int(stall_s / self.period_s + 1e-9) - 1
+        if missed < 1:
+            return 0
+        self.longest_stall_s = max(self.longest_stall_s, stall_s)
+        if stall_s <= self.max_stall_s:
+            self.stalls += 1
+            self.tick.supervisor.events.push(
+                t, "timing", "stall_ridden_through",
+                f"{stall_s * 1e3:.1f} ms between two ticks ({missed} missed periods), within the "
+                f"{self.max_stall_s * 1e3:.1f} ms stall budget",
+            )
+        return missed
 
     def run(self) -> LoopResult:
         """Run the whole test: arm, settle, the record, the tail, the ramp-down."""
@@ -151,26 +197,39 @@ class ControlLoop:
         finished_at = None
         outcome = "error"
         self.signals.install()
+        threads = [thread.name for thread in threading.enumerate()]  # what shares the interpreter with the loop
         try:
             self.scheduler.start()
             k = 0
             previous_t = -self.period_s
-            while True:
-                t, lateness = self._wait(k)
-                dt = t - previous_t  # a whole period, or more after deadlines were skipped
-                previous_t = t
-                health.operator_stop = self.signals.stop_requested
-                health.operator_trip = self.signals.trip_requested
-                started, cpu_started = time.perf_counter(), time.thread_time()
-                command = tick.run(t, dt, t, lateness, self.scheduler.consecutive_overruns, self.lockstep is None)
-                timing.add(lateness, time.perf_counter() - started, time.thread_time() - cpu_started)
-                run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
-                self._update_status(t, run_started, duration_s, command)
-                k += 1
-                if finished and finished_at is None:
-                    finished_at = t
-                if finished_at is not None and t - finished_at >= self.config.after_s:
-                    break
+            previous_woke = None
+            t = 0.0
+            try:
+                while True:
+                    t, lateness = self._wait(k)
+                    dt = t - previous_t  # a whole period, or more after deadlines were skipped
+                    previous_t = t
+                    woke = t + lateness  # when this tick really began (s, loop clock)
+                    stall_s = 0.0 if previous_woke is None or self.lockstep is not None else woke - previous_woke
+                    previous_woke = woke
+                    missed = self._note_stall(t, stall_s)
+                    health.operator_stop = self.signals.stop_requested
+                    health.operator_trip = self.signals.trip_requested
+                    started, cpu_started = time.perf_counter(), time.thread_time()
+                    command = tick.run(t, dt, t, lateness, stall_s, missed, self.lockstep is None)
+                    timing.add(lateness, time.perf_counter() - started, time.thread_time() - cpu_started)
+                    run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
+                    self._update_status(t, run_started, duration_s, command, lateness)
+                    k += 1
+                    if finished and finished_at is None:
+                        finished_at = t
+                    if finished_at is not None and t - finished_at >= self.config.after_s:
+                        break
+            except ArmTimeout:
+                raise  # nothing armed, nothing moved: the caller refuses the run
+            except Exception as exc:  # noqa: BLE001 - a fault in the loop itself: trip, never leave mid-run silently
+                tick.supervisor.report_exception(t, exc)
+                tick.send_disable(t)
             state = tick.supervisor.state
             outcome = {State.DONE: "completed", State.TRIPPED: "tripped"}.get(state, "stopped")
             if outcome == "completed" and self.signals.stop_requested:
@@ -183,24 +242,45 @@ class ControlLoop:
         return LoopResult(
             outcome=outcome,
             trip_reason=tick.supervisor.command.trip_reason,
-            timing=timing.summary(),
+            trip_detail=tick.supervisor.trip_detail,
+            timing={**timing.summary(), "threads": threads, "stalls_ridden_through": self.stalls, "longest_stall_s": self.longest_stall_s,
+                    "stall_budget_s": self.max_stall_s, "lockstep": self.lockstep is not None},
             realtime_report=report.lines,
             operator_stopped=self.signals.stop_requested,
             record_start_t_s=run_started,
         )
 
-    def _update_status(self, t: float, run_started: float | None, duration_s: float, command) -> None:
-        status, tick = self.status, self.tick
-        status.state = command.state.name
+    def _update_status(self, t: float, run_started: float | None, duration_s: float, command, lateness_s: float) -> None:
+        """Write this tick into the shared status block (no allocation; text only when it changed).
+
+        Parameters
+        ----------
+        t : float
+            Loop time of the tick (s).
+        run_started : float or None
+            Loop time RUNNING began (s); None before.
+        duration_s : float
+            Seconds of record (s).
+        command
+            The tick's command (state, force, trip reason).
+        lateness_s : float
+            The tick's wake-up lateness (s), for the console's percentiles.
+        """
+        status, tick, health, scheduler = self.status, self.tick, self.tick.health, self.scheduler
+        status.state = command.state  # a State: stored as its code, read back as its name
         status.t_s = t
         status.run_t_s = 0.0 if run_started is None else t - run_started
         status.duration_s = duration_s
         status.stroke_m = tick.meas.sliding_displacement_m
         status.force_N = command.force_N
         status.sliding_variable = tick.controller.sliding_variable
-        status.overruns = self.scheduler.overruns
-        status.e2e_rejects = tick.health.e2e_rejects
-        status.error_frames = tick.health.error_frames
-        status.send_failures = tick.health.send_failures
+        status.overruns = scheduler.overruns
+        status.e2e_rejects = health.e2e_rejects
+        status.error_frames = health.error_frames
+        status.send_failures = health.send_failures
+        status.stalls = self.stalls
+        status.longest_stall_s = self.longest_stall_s
+        status.missed_periods = scheduler.overruns
         status.last_event = tick.last_event
         status.trip_reason = command.trip_reason
+        status.add_lateness(lateness_s)

@@ -11,17 +11,21 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 
+import can
 import numpy as np
 
 from harness.errors import HarnessError
 from harness.loop.row import COLUMNS, INDEX, N_STORIES
+from harness.loop.trip_outputs import TripOutputs
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
 
 DRIVE_READY, DRIVE_ENABLED, DRIVE_FAULT = 1, 2, 3
 _ROW_T, _ROW_STATE = INDEX["t_s"], INDEX["state"]
+_PASSIVE, _BUS_OFF = can.BusState.PASSIVE, can.BusState.ERROR
 
 
 class ControlTick:
@@ -39,9 +43,18 @@ class ControlTick:
         Has ``record_row(row)`` and ``record_event(t, kind, name, detail)`` (a RunFolder).
     heartbeat_every : int
         Send the heartbeat every this many ticks.
+    estop_every : int
+        While TRIPPED with the ``estop`` trip action, repeat the ESTOP frame every this many ticks
+        (loop rate / ``can.estop_rate_hz``).
+    stop_table : callable, optional
+        ``stop_table(now)``: the table controller's stop (RIG_CONTROL stop), for the ``stop_table``
+        trip action; None when the run has no table link.
     """
 
-    def __init__(self, link, controller, estimator, supervisor: Supervisor, recorder=None, heartbeat_every: int = 5):
+    def __init__(
+        self, link, controller, estimator, supervisor: Supervisor, recorder=None, heartbeat_every: int = 5,
+        estop_every: int = 5, stop_table: Callable[[float], object] | None = None,
+    ):
         self.reader = link.reader
         self.writer = link.writer
         self.bus_health = link.reader.health
@@ -52,8 +65,11 @@ class ControlTick:
         self.health = TickHealth()
         self.meas = self.health.meas
         self.row = np.zeros(len(COLUMNS))
+        self._row_mv = memoryview(self.row)  # the tick writes through it: a third of a numpy item store
         self.heartbeat_every = max(1, int(heartbeat_every))
         self.ticks = 0
+        #: Times the zero, disabled command could not be sent (the drive watchdog is then the backstop).
+        self.disable_failures = 0
         self.last_event = ""
         self.command: SupervisedCommand = supervisor.command
         reader = self.reader
@@ -64,9 +80,11 @@ class ControlTick:
         self._drift_i = tuple(self._drifts.index(f"drift_{j}") for j in range(1, N_STORIES + 1))
         self._accel_i = tuple(self._accels.index(f"accel_{j}") for j in range(1, N_STORIES + 1))
         self._sink = self._record_event if recorder is not None else self._keep_event
+        #: The trip's ESTOP frame and table stop (safety.trip_actions), sent after the disable command.
+        self.trip_outputs = TripOutputs(link.writer, supervisor.config.trip_actions, estop_every, stop_table)
 
     # ------------------------------------------------------------------ read
-    def read(self, now: float, consecutive_overruns: int, poll: bool = True) -> None:
+    def read(self, now: float, stall_s: float = 0.0, missed_periods: int = 0, poll: bool = True) -> None:
         """Poll the bus (unless the caller already did this tick) and update the records in place."""
         health = self.health
         if poll:
@@ -84,8 +102,8 @@ class ControlTick:
         health.e2e_rejects = self.reader.e2e_rejects
         bus = self.bus_health
         health.error_frames = bus.error_frames
-        health.error_passive = bus.state.name == "PASSIVE"
-        health.bus_off = bus.state.name == "ERROR"
+        health.error_passive = bus.state is _PASSIVE
+        health.bus_off = bus.state is _BUS_OFF
         health.send_failures = bus.send_failures
         health.foreign_command = self.reader.foreign_command_seen
         drive = self.reader.drive_state
@@ -95,21 +113,27 @@ class ControlTick:
         health.actuator_status_age_s = status.age(now)
         health.measured_force_N = self.reader.measured_force_n
         health.estop = self.reader.estop_requested
-        health.consecutive_overruns = consecutive_overruns
+        health.estop_panel_age_s = self.reader.panel_age(now)
+        health.stall_s = stall_s
+        health.missed_periods = missed_periods
 
     # ------------------------------------------------------------------ the tick
     def run(
-        self, t: float, dt: float, now: float, lateness_s: float = 0.0, consecutive_overruns: int = 0, poll: bool = True
+        self, t: float, dt: float, now: float, lateness_s: float = 0.0, stall_s: float = 0.0, missed_periods: int = 0,
+        poll: bool = True,
     ) -> SupervisedCommand:
         """Run one tick at loop time ``t`` (s) with step ``dt`` (s); ``now`` is the drivers' clock (s).
 
+        ``stall_s`` is the time since the previous tick's command (s; 0 in lockstep) and
+        ``missed_periods`` the deadlines skipped before this tick. The bus is polled first,
+        so sample ages are judged on what arrived while the loop was away.
         ``poll=False`` when the caller has already polled the bus this tick (lockstep).
         """
         started = time.perf_counter()
-        self.read(now, consecutive_overruns, poll)
         supervisor = self.supervisor
         friction = raw = math.nan
         try:
+            self.read(now, stall_s, missed_periods, poll)
             friction = self.estimator.update(t, dt, self.meas.sliding_velocity_m_s)
             raw = self.controller.update(t, dt, self.meas, friction, None)
             command = supervisor.update(t, dt, self.health, raw)
@@ -117,33 +141,45 @@ class ControlTick:
             command = supervisor.report_exception(t, exc)
         self.write(t, command, now)
         self.ticks += 1
-        supervisor.events.drain(self._sink)
-        self._fill_row(t, command, friction, raw, lateness_s, time.perf_counter() - started, consecutive_overruns > 0)
-        if self.recorder is not None:
-            self.recorder.record_row(self.row)
+        try:
+            supervisor.events.drain(self._sink)
+            self._fill_row(t, command, friction, raw, lateness_s, time.perf_counter() - started, missed_periods)
+            if self.recorder is not None:
+                self.recorder.record_row(self.row)
+        except Exception as exc:  # noqa: BLE001 - a fault in our own recording code: trip now, zero sent at once
+            command = supervisor.report_exception(t, exc)
+            self.send_disable(now)
         return command
 
     def write(self, t: float, command: SupervisedCommand, now: float) -> None:
-        """Send the supervised command (the only path to the actuator) and the heartbeat."""
+        """Send the supervised command (the only path to the actuator) and the heartbeat; never raises.
+
+        A value the DBC cannot carry, or any other failure to encode or send, trips the run
+        (``tick_exception``) and zero force with the drive disabled is sent instead.
+        """
         try:
             self.writer.command(command.force_N, command.enable, now)
             if self.ticks % self.heartbeat_every == 0:
                 self.writer.heartbeat(int(command.state), now)
-        except HarnessError as exc:  # a value the DBC cannot carry: never send it, trip instead
+        except Exception as exc:  # noqa: BLE001 - never send it, trip instead
             self.supervisor.report_exception(t, exc)
-            self.writer.command(0.0, False, now)
+            self.send_disable(now)
+            return
+        self.trip_outputs.update(command.state, command.trip_reason, now)  # after the disable command, same tick
 
     def send_disable(self, now: float) -> None:
-        """Command zero force with the drive disabled, whatever the state (used on the way out)."""
+        """Command zero force with the drive disabled, whatever the state (on a trip and on the way out); never raises."""
         try:
             self.writer.command(0.0, False, now)
             self.writer.heartbeat(int(self.supervisor.state), now)
-        except HarnessError:
-            pass
+        except Exception:  # noqa: BLE001 - nothing more can be sent; the drive watchdog is the backstop
+            self.disable_failures += 1
+        supervisor = self.supervisor
+        self.trip_outputs.update(supervisor.state, supervisor.command.trip_reason, now)
 
     # ------------------------------------------------------------------ record
     def _fill_row(self, t, command, friction, raw, lateness, compute, overrun) -> None:
-        row, meas = self.row, self.meas
+        row, meas = self._row_mv, self.meas
         table, base = self._table.values, self._base.values
         row[0] = t
         row[1] = int(command.state)
@@ -173,7 +209,7 @@ class ControlTick:
         row[k + 9] = command.acted
         row[k + 10] = lateness
         row[k + 11] = compute
-        row[k + 12] = 1.0 if overrun else 0.0
+        row[k + 12] = overrun  # deadlines missed before this tick
         row[k + 13] = self.health.e2e_rejects
         row[k + 14] = self.health.error_frames
         row[k + 15] = self.health.send_failures

@@ -16,13 +16,14 @@ class TimingStats:
         Most ticks recorded; later ticks only update the counters.
     """
 
-    __slots__ = ("lateness_s", "compute_s", "cpu_s", "count", "overruns", "_capacity")
+    __slots__ = ("lateness_s", "compute_s", "cpu_s", "count", "overruns", "_capacity", "_views")
 
     def __init__(self, capacity: int):
         self._capacity = int(capacity)
         self.lateness_s = prefaulted_zeros(self._capacity)
         self.compute_s = prefaulted_zeros(self._capacity)
         self.cpu_s = prefaulted_zeros(self._capacity)
+        self._views = (memoryview(self.lateness_s), memoryview(self.compute_s), memoryview(self.cpu_s))
         self.count = 0
         self.overruns = 0
 
@@ -38,11 +39,13 @@ class TimingStats:
         cpu_s : float
             CPU time the loop thread itself spent on the tick (s).
         """
-        if self.count < self._capacity:
-            self.lateness_s[self.count] = lateness_s
-            self.compute_s[self.count] = compute_s
-            self.cpu_s[self.count] = cpu_s
-        self.count += 1
+        k = self.count
+        if k < self._capacity:
+            lateness, compute, cpu = self._views  # memoryviews: a third of a numpy item store
+            lateness[k] = lateness_s
+            compute[k] = compute_s
+            cpu[k] = cpu_s
+        self.count = k + 1
 
     def recent_percentiles(self, window: int = 500) -> tuple[float, float]:
         """Lateness p50 and p99 over the last ``window`` ticks (s); for the console, not the tick."""

@@ -38,7 +38,7 @@ RunKind = Literal["dry-run", "run", "simulation"]
 Outcome = Literal["completed", "tripped", "error", "incomplete"]
 
 RUN_KINDS: Final[tuple[str, ...]] = ("dry-run", "run", "simulation")
-OUTCOMES: Final[tuple[str, ...]] = ("completed", "stopped", "tripped", "error", "incomplete")
+OUTCOMES: Final[tuple[str, ...]] = ("completed", "stopped", "tripped", "refused", "error", "incomplete")
 
 #: A column name MATLAB keeps as-is (valid identifier, at most namelengthmax = 63 chars).
 _COLUMN_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,62}$")

@@ -115,14 +115,23 @@ def write_json_atomic(path: Path, data: Mapping[str, Any]) -> None:
         Final file name.
     data : mapping
         JSON-serialisable data; non-finite floats are written as ``NaN``/``Infinity``.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written; ``path`` then keeps its previous content.
     """
     temporary = path.with_name(f".{path.name}.tmp")
     text = json.dumps(data, indent=2, sort_keys=False, default=json_default)
-    with open(temporary, "w", encoding="utf-8") as handle:
-        handle.write(text + "\n")
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(temporary, path)
+    try:
+        with open(temporary, "w", encoding="utf-8") as handle:
+            handle.write(text + "\n")
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(temporary, path)
+    except OSError:  # disk full, file-size limit: keep the old file whole and leave no half-written one
+        temporary.unlink(missing_ok=True)
+        raise
     _fsync_dir(path.parent)
 
 

@@ -139,7 +139,8 @@ def load_run(path: Path | str) -> RunData:
     """
     folder = Path(path)
     if not folder.is_dir():
-        raise RunFolderError("no such folder, expected a run folder", str(folder))
+        found = "is a file" if folder.exists() else "no such folder"
+        raise RunFolderError(f"{found}, expected a run folder", str(folder))
     meta_path = folder / METADATA_FILE
     if not meta_path.is_file():
         cases = case_folders(folder)
@@ -160,6 +161,8 @@ def load_run(path: Path | str) -> RunData:
         notes.insert(
             0, f"run {folder.name} did not finish cleanly (outcome 'incomplete'); its data end at the last flush"
         )
+    elif metadata.get("record_complete") is False:
+        notes.insert(0, f"run {folder.name}: {record_loss_text(metadata)}")
     return RunData(folder, metadata, profile, columns, signals, events, can_log, incomplete, tuple(notes + event_notes))
 
 
@@ -221,36 +224,92 @@ def _read_profile(path: Path) -> dict[str, Any]:
     return data if isinstance(data, dict) else {}
 
 
+def record_loss_text(metadata: Mapping[str, Any]) -> str:
+    """One sentence on what a run's recorder lost, from ``metadata.json`` (``record_complete`` false)."""
+    recorder = metadata.get("recorder") if isinstance(metadata.get("recorder"), Mapping) else {}
+    lost = recorder.get("lost") if isinstance(recorder.get("lost"), Mapping) else {}
+    counts = ", ".join(f"{lost[key]} {key}" for key in ("rows", "frames", "events") if lost.get(key))
+    error = recorder.get("error")
+    return (
+        "the record is incomplete"
+        + (f": {counts} lost" if counts else "")
+        + (f" ({error})" if error else "")
+        + f"; of its rows, the first {recorder.get('rows_written', '?')} were confirmed written"
+    )
+
+
+def _read_text(path: Path, what: str) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise RunFolderError(
+            f"byte 0x{err.object[err.start]:02x} at offset {err.start} is not UTF-8 text, expected {what} "
+            "written by the harness (is the file damaged?)", str(path),
+        ) from err
+    except OSError as err:
+        raise RunFolderError(f"cannot read it ({err.strerror or err}), expected {what}", str(path)) from err
+
+
 def _read_signals(path: Path, metadata: Mapping[str, Any]) -> tuple[tuple[str, ...], dict[str, np.ndarray], list[str]]:
-    text = path.read_text(encoding="utf-8")
+    text = _read_text(path, "CSV text")
     lines = text.split("\n")
     header = tuple(lines[0].strip().split(",")) if lines[0].strip() else ()
     expected = tuple(metadata["columns"])
     if header != expected:
+        shown = lines[0].strip()
+        shown = repr(shown if len(shown) <= 120 else shown[:117] + "...")
         raise RunFolderError(
-            f"found header {','.join(header)!r}, expected the columns in metadata.json {','.join(expected)!r}", str(path)
+            f"found header {shown} on line 1, expected the columns in metadata.json {','.join(expected)!r}", str(path)
         )
     notes: list[str] = []
     body = lines[1:]
     if body and body[-1] != "":
-        notes.append(f"{path.name}: dropped a torn last line (the run stopped while writing it)")
-    rows = [line for line in body[:-1] if line]
+        notes.append(f"{path.name}: dropped a torn last line {len(lines)} (the run stopped while writing it)")
+    numbered = [(number, line) for number, line in enumerate(body[:-1], start=2) if line]
     width = len(header)
     table = np.empty((0, width))
-    if rows:
+    if numbered:
         try:
-            table = np.loadtxt(rows, delimiter=",", ndmin=2, dtype=float)
+            table = np.loadtxt([line for _, line in numbered], delimiter=",", ndmin=2, dtype=float)
         except ValueError as err:
-            message = f"cannot parse the rows ({err}), expected {width} numbers per line"
-            raise RunFolderError(message, str(path)) from err
+            raise RunFolderError(_bad_row(numbered, width), str(path)) from err
+    if table.shape[1] != width:
+        raise RunFolderError(f"found {table.shape[1]} values per line, expected {width} (the header's columns)", str(path))
+    _check_row_count(path, metadata, len(numbered))
     signals = {name: np.ascontiguousarray(table[:, i]) for i, name in enumerate(header)}
     return header, signals, notes
+
+
+def _bad_row(numbered: list[tuple[int, str]], width: int) -> str:
+    """The first line that is not ``width`` numbers, for the message."""
+    for number, line in numbered:
+        fields = line.split(",")
+        try:
+            [float(field) for field in fields]
+        except ValueError:
+            return f"line {number}: found {line[:80]!r}, expected {width} comma-separated numbers"
+        if len(fields) != width:
+            return f"line {number}: found {len(fields)} values, expected {width} comma-separated numbers"
+    return f"cannot parse the rows, expected {width} comma-separated numbers per line"
+
+
+def _check_row_count(path: Path, metadata: Mapping[str, Any], rows: int) -> None:
+    """Refuse a finished run whose file holds fewer rows than its recorder confirmed writing (cut after the run)."""
+    recorder = metadata.get("recorder")
+    written = recorder.get("rows_written") if isinstance(recorder, Mapping) else None
+    if metadata.get("outcome", "incomplete") == "incomplete" or not isinstance(written, int) or rows >= written:
+        return
+    raise RunFolderError(
+        f"holds {rows} rows (lines 2 to {rows + 1}), but metadata.json says the recorder wrote {written}: "
+        f"rows {rows + 1} to {written} (lines {rows + 2} to {written + 1}) are missing, so the file was cut or "
+        "damaged after the run; expected the whole file (restore it from a copy)", str(path),
+    )
 
 
 def _read_events(path: Path) -> tuple[list[dict[str, Any]], list[str]]:
     events: list[dict[str, Any]] = []
     notes: list[str] = []
-    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+    for number, line in enumerate(_read_text(path, "JSON lines").splitlines(), start=1):
         if not line.strip():
             continue
         try:

@@ -14,6 +14,7 @@ the consumer also holds. ``FrameRing.push`` copies a frame's fields in about 1 u
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -139,6 +140,12 @@ class FrameRing:
         self._channel = prefaulted_zeros(capacity, dtype=np.int16)
         self._data = bytearray(capacity * MAX_DATA)
         self._data_view = memoryview(self._data)
+        # the tick writes through memoryviews of the same memory: a third of a numpy item store
+        self._timestamp_mv = memoryview(self._timestamp)
+        self._id_mv = memoryview(self._arbitration_id)
+        self._dlc_mv = memoryview(self._dlc)
+        self._flags_mv = memoryview(self._flags)
+        self._channel_mv = memoryview(self._channel)
         self._channels: dict[Any, int] = {None: 0}
         self._channel_names: list[Any] = [None]
         self._write = 0
@@ -155,8 +162,18 @@ class FrameRing:
         """Frames accepted since creation."""
         return self._write
 
-    def push(self, msg: can.Message) -> bool:
-        """Copy the fields of ``msg`` in; never blocks. False if full (dropped and counted)."""
+    def push(self, msg: can.Message, rx: bool | None = None, timestamp: float | None = None) -> bool:
+        """Copy the fields of ``msg`` in; never blocks. False if full (dropped and counted).
+
+        Parameters
+        ----------
+        msg : can.Message
+            The frame; not modified.
+        rx : bool, optional
+            Its direction as the recorder should log it (default ``msg.is_rx``).
+        timestamp : float, optional
+            Its time as the recorder should log it (s; default ``msg.timestamp``).
+        """
         write = self._write
         if write - self._read >= self._capacity:
             self.dropped += 1
@@ -166,16 +183,31 @@ class FrameRing:
         size = len(data) if data is not None else 0
         if size > MAX_DATA:
             raise RecordingError(f"found a CAN frame with {size} data bytes, expected at most {MAX_DATA}")
-        self._timestamp[slot] = msg.timestamp
-        self._arbitration_id[slot] = msg.arbitration_id
-        self._dlc[slot] = size
-        self._flags[slot] = _flags_of(msg)
-        self._channel[slot] = self._channel_index(msg.channel)
+        if msg.is_extended_id or msg.is_error_frame or msg.is_remote_frame or msg.is_fd:
+            flags = _flags_of(msg) & ~FLAG_RX
+        else:
+            flags = 0  # a classic data frame with an 11-bit ID: the frames of this protocol
+        if msg.is_rx if rx is None else rx:
+            flags |= FLAG_RX
+        self._timestamp_mv[slot] = msg.timestamp if timestamp is None else timestamp
+        self._id_mv[slot] = msg.arbitration_id
+        self._dlc_mv[slot] = size
+        self._flags_mv[slot] = flags
+        channel = self._channels.get(msg.channel)
+        self._channel_mv[slot] = channel if channel is not None else self._channel_index(msg.channel)
         if size:
             offset = slot * MAX_DATA
             self._data_view[offset : offset + size] = data
         self._write = write + 1
         return True
+
+    def received(self, msg: can.Message) -> bool:
+        """:meth:`push` a frame this node received, whatever the bus marked it (a reader's tap)."""
+        return self.push(msg, True)
+
+    def sent(self, msg: can.Message) -> bool:
+        """:meth:`push` a frame this node sent, stamped with the wall clock now (a writer's tap)."""
+        return self.push(msg, False, time.time())
 
     def _channel_index(self, channel: Any) -> int:
         index = self._channels.get(channel)

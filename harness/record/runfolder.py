@@ -11,11 +11,17 @@ Typical use by the loop::
 
 Until :meth:`RunFolder.finish` runs, ``metadata.json`` says ``"outcome": "incomplete"``;
 a process that dies leaves it so, and everything flushed stays readable.
+
+:meth:`RunFolder.finish` also says whether the record is whole: ``"record_complete"`` is
+false when the writer failed (disk full, file-size limit) or a queue dropped anything, and
+``metadata["recorder"]`` then counts what was lost (``lost``: rows, frames, events) and
+gives the error. The outcome stays what the run did (the rig is not tripped for a lost
+record); the command reports the loss (docs/SAFETY.md, "recorder").
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -58,6 +64,8 @@ class RunFolder:
         self.metadata = metadata
         self._writer = writer
         self._finished = False
+        #: The error that kept :meth:`finish` from rewriting ``metadata.json``, if any.
+        self.metadata_error: OSError | None = None
 
     @classmethod
     def create(
@@ -154,11 +162,37 @@ class RunFolder:
             end_time=iso(utc_now()),
             summary=dict(summary) if summary is not None else None,
         )
-        self.metadata["recorder"] = self.recorder_status()
-        write_json_atomic(self.path / METADATA_FILE, self.metadata)
+        status = self.recorder_status()
+        self.metadata["recorder"] = status
+        self.metadata["record_complete"] = status["error"] is None and not any(status["lost"].values())
+        try:
+            write_json_atomic(self.path / METADATA_FILE, self.metadata)
+        except OSError as err:  # the disk that failed the writer may fail this too: the file keeps "incomplete"
+            self.metadata_error = err
+
+    @property
+    def record_complete(self) -> bool:
+        """After :meth:`finish`: True if every row, frame and event and the final metadata reached the disk."""
+        return bool(self.metadata.get("record_complete")) and self.metadata_error is None
+
+    def record_problem(self) -> str:
+        """After :meth:`finish`: what the record lost and why, in one line ("" if it is complete)."""
+        if self.record_complete:
+            return ""
+        status = self.metadata.get("recorder") or self.recorder_status()
+        lost = status["lost"]
+        texts = []
+        if any(lost.values()) or status["error"]:
+            parts = [f"{lost['rows']} of {lost['rows'] + status['rows_written']} rows"]
+            parts += [f"{lost[key]} {key}" for key in ("frames", "events") if lost[key]]
+            cause = status["error"] or "the recorder's queues were full"
+            texts.append(f"lost {', '.join(parts)} ({cause})")
+        if self.metadata_error is not None:
+            texts.append(f"metadata.json not rewritten ({type(self.metadata_error).__name__}: {self.metadata_error})")
+        return "; ".join(texts)
 
     def recorder_status(self) -> dict[str, Any]:
-        """Counts written and dropped, and any writer error."""
+        """Counts written, dropped and lost (see :meth:`RunWriter.lost`), and any writer error."""
         writer = self._writer
         error = writer.error
         return {
@@ -166,6 +200,8 @@ class RunFolder:
             "frames_written": writer.frames_written,
             "events_written": writer.events_written,
             "dropped": writer.drops(),
+            "lost": writer.lost(),
+            "longest_hold_s": writer.longest_hold_s,
             "error": f"{type(error).__name__}: {error}" if error is not None else None,
         }
 
@@ -193,6 +229,17 @@ class RunFolder:
     def record_frame(self, msg: can.Message) -> bool:
         """Queue a sent or received CAN frame; never blocks; False if dropped."""
         return self._writer.record_frame(msg)
+
+    def frame_taps(self) -> tuple[Callable[[can.Message], bool], Callable[[can.Message], bool]]:
+        """The taps a link's reader and writer call with every frame: ``(received, sent)``.
+
+        Each queues the frame straight into the recorder's ring with its direction (SocketCAN
+        marks frames from other processes of the same host ``is_rx=False``, so the side that
+        saw the frame decides) and, for sent frames, the wall-clock time (the writer stamps
+        them with loop time); received frames keep the bus's timestamp.
+        """
+        frames = self._writer.frames
+        return frames.received, frames.sent
 
     def record_event(self, t: float | None, kind: str, name: str, detail: Any = None) -> bool:
         """Queue an event (``kind`` e.g. lifecycle/trip/warning/interlock); never blocks; False if dropped."""
@@ -237,6 +284,7 @@ def _initial_metadata(
         "end_time": None,
         "outcome": "incomplete",
         "trip_reason": None,
+        "record_complete": None,
         "columns": list(columns),
         "files": {
             "profile": PROFILE_FILE,

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness.errors import RecordError
+from harness.input_limits import MAX_SEED
 
 #: Environment variable that names the records directory.
 ENV_RECORDS_DIR = "HARNESS_RECORDS_DIR"
@@ -136,8 +137,8 @@ def synthetic_seed(name: str) -> int | None:
         seed = int(seed_text)
     except ValueError as err:
         raise RecordError(f"expected 'synthetic:SEED' with a whole-number seed, found {name!r}") from err
-    if seed < 0:
-        raise RecordError(f"expected a seed >= 0 in {name!r}")
+    if not 0 <= seed <= MAX_SEED:
+        raise RecordError(f"expected a seed in [0, {MAX_SEED}] in {name!r}")
     return seed
 
 
@@ -174,7 +175,8 @@ def resolve_record(name_or_path: str, records_dir: str | Path | None) -> Path:
     if given.is_file():
         return given
     if looks_like_path(name_or_path):
-        raise RecordError(f"record file {given.resolve()} does not exist. {_help_text()}")
+        state = "is a directory, expected a record file" if given.is_dir() else "does not exist"
+        raise RecordError(f"record file {given.resolve()} {state}. {_help_text()}")
     for candidate in _candidates(name_or_path, records_dir):
         if candidate.is_file():
             return candidate
@@ -209,7 +211,9 @@ def _missing_message(name: str, records_dir: str | Path | None) -> str:
         )
     else:
         folder = Path(records_dir).expanduser().resolve()
-        state = "" if folder.is_dir() else " (that directory does not exist)"
+        state = ""
+        if not folder.is_dir():
+            state = " (that is a file, expected a directory)" if folder.exists() else " (that directory does not exist)"
         wanted = CATALOG[name].filename if name in CATALOG else f"{name}, {name}.csv or {name}.AT2"
         where = f"looked for {wanted} in {folder}{state}"
     return f"record {name!r} not found: {where}. {_help_text()}"

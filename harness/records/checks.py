@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.errors import RecordError
-from harness.records.accel_units import G_M_S2
+from harness.records.accel_units import G_M_S2, accel_factor
 
 #: Fewest samples a record may have.
 MIN_SAMPLES = 10
@@ -61,13 +61,28 @@ def _refuse_step(bad: np.ndarray, times_s: np.ndarray, linenos: np.ndarray, dt: 
         )
 
 
-def check_samples(accel_m_s2: np.ndarray, linenos: np.ndarray, file: str | Path) -> None:
-    """Refuse too few samples and any |acceleration| (m/s^2) beyond :data:`MAX_ABS_ACCEL_G`, naming the line."""
-    check_count(accel_m_s2.size, file)
-    peak = np.abs(accel_m_s2)
-    worst = int(np.argmax(peak))
-    if peak[worst] > MAX_ABS_ACCEL_G * G_M_S2:
+def check_samples(values: np.ndarray, linenos: np.ndarray, file: str | Path, unit: str = "m/s^2") -> None:
+    """Refuse too few samples and any |acceleration| beyond :data:`MAX_ABS_ACCEL_G`, naming the line.
+
+    Parameters
+    ----------
+    values : ndarray
+        Accelerations in ``unit``, as read from the file (checked before any conversion, so
+        a value near the float limit such as 1e308 cannot overflow to infinity).
+    linenos : ndarray
+        File line of each value.
+    file : str or Path
+        For messages.
+    unit : str
+        Unit of ``values``: ``"g"``, ``"m/s^2"``, ``"cm/s^2"`` (or an alias).
+    """
+    check_count(values.size, file)
+    to_g = accel_factor(unit) / G_M_S2  # at most 1, so the product below cannot overflow
+    peak_g = np.abs(values) * to_g
+    worst = int(np.argmax(peak_g))
+    if peak_g[worst] > MAX_ABS_ACCEL_G:
+        in_g = "" if unit == "g" else f" ({values[worst] * to_g:.4g} g)"
         raise RecordError(
-            f"{file}:{linenos[worst]}: acceleration {accel_m_s2[worst] / G_M_S2:.4g} g exceeds "
-            f"{MAX_ABS_ACCEL_G:g} g, which no record reaches; check the unit (header or accel_unit)"
+            f"{file}:{linenos[worst]}: acceleration {values[worst]:.4g} {unit}{in_g} exceeds "
+            f"{MAX_ABS_ACCEL_G:g} g, which no record reaches; check the unit (header or record.accel_unit)"
         )

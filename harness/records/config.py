@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness.errors import RecordError
+from harness.input_limits import MAX_DURATION_S, MAX_PGA_G, MAX_SEED, MAX_TIME_SCALE, MIN_TIME_SCALE
 from harness.records.accel_units import normalize_accel_unit
 from harness.records.catalog import CATALOG, looks_like_path, records_dir_from, resolve_record, synthetic_seed
 from harness.records.loaders import RawRecord, load_record
@@ -36,11 +37,18 @@ class RecordConfig:
 
     name: str = quantity("synthetic", doc="catalog name, file name or path, or synthetic / synthetic:SEED")
     records_dir: str | None = quantity(None, doc="directory of the real records (relative to the profile)")
-    pga_g: float | None = quantity(None, unit="g", gt=0, doc="target peak table acceleration (g); none: the record's")
-    time_scale: float = quantity(1.0, gt=0, doc="time compression factor F: every step is divided by F")
-    duration_s: float | None = quantity(None, unit="s", gt=0, doc="run length after compression (s); none: whole record")
+    # Bounds shared with the command line; harness/input_limits.py gives the reasons.
+    pga_g: float | None = quantity(
+        None, unit="g", gt=0, le=MAX_PGA_G, doc="target peak table acceleration (g); none: the record's"
+    )
+    time_scale: float = quantity(
+        1.0, ge=MIN_TIME_SCALE, le=MAX_TIME_SCALE, doc="time compression factor F: every step is divided by F"
+    )
+    duration_s: float | None = quantity(
+        None, unit="s", gt=0, le=MAX_DURATION_S, doc="run length after compression (s); none: whole record"
+    )
     accel_unit: str | None = quantity(None, doc="unit of a file that does not state it: g, m/s^2, cm/s^2 (gal)")
-    seed: int = quantity(0, ge=0, doc="seed of the synthetic record")
+    seed: int = quantity(0, ge=0, le=MAX_SEED, doc="seed of the synthetic record")
 
     def __post_init__(self) -> None:
         if not self.name.strip():
@@ -131,7 +139,13 @@ def load_motion(
         synthetic_duration_s=(duration or DEFAULT_SYNTHETIC_DURATION_S) * scale,
         synthetic_pga_g=target or DEFAULT_SYNTHETIC_PGA_G,
     )
-    return process_record(raw, pga_g=target, time_scale=scale, duration_s=duration)
+    motion = process_record(raw, pga_g=target, time_scale=scale, duration_s=duration)
+    if motion.duration_s > MAX_DURATION_S:
+        raise RecordError(
+            f"record {motion.name!r} runs {motion.duration_s:g} s after a time scale of {scale:g}, expected at most "
+            f"{MAX_DURATION_S:g} s (what a run or a simulation may allocate); cut it with --duration or record.duration_s"
+        )
+    return motion
 
 
 def _profile_name(name: str, base_dir: str | Path) -> str:

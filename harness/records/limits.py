@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 from harness.errors import RecordError
 from harness.records.processing import GroundMotion
@@ -28,11 +29,17 @@ class TableLimits:
         Largest |table velocity| (m/s).
     acceleration_limit_g : float
         Largest |table acceleration| with the specimen on it (g).
+    link : {"can", "none"}
+        How ``harness run`` reaches the table controller: ``can`` sends RIG_CONTROL start at
+        RUNNING and stop at the end and on a trip, and counts record time from the controller's
+        RIG_STATUS ``table_running``; ``none`` says the table controller is not on the bus (the
+        operator starts and stops it; the consequence is printed before arming).
     """
 
     stroke_limit_m: float = quantity(unit="m", gt=0, doc="table half-stroke, +/- (m)")
     velocity_limit_m_s: float = quantity(unit="m/s", gt=0, doc="largest |table velocity| (m/s)")
     acceleration_limit_g: float = quantity(unit="g", gt=0, doc="largest |table acceleration| (g)")
+    link: Literal["can", "none"] = quantity("can", doc="table controller on the CAN bus (RIG_CONTROL/RIG_STATUS) or not")
 
     def __post_init__(self) -> None:
         for name in ("stroke_limit_m", "velocity_limit_m_s", "acceleration_limit_g"):

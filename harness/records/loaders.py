@@ -48,6 +48,10 @@ _TIME_NAMES = ("t", "time", "sec", "seconds")
 
 Line = tuple[int, str]
 
+#: Largest record file read (bytes): a 600 s record at 200 Hz is about 2 MB of text; the cap
+#: bounds what one read allocates (and refuses a disk image given by mistake).
+MAX_RECORD_BYTES = 50_000_000
+
 
 class SampledAcceleration:
     """Shared facts of anything with ``accel_m_s2`` sampled every ``dt_s`` (records and table motions)."""
@@ -134,12 +138,11 @@ def load_record(path: str | Path, *, accel_unit: str | None = None, name: str | 
     unit = normalize_accel_unit(accel_unit) if accel_unit is not None else None
     if file.suffix.lower() == ".at2" or _is_at2(lines):
         dt, values, linenos = _parse_at2(lines, file, unit)
-        factor = G_M_S2
+        stated = "g"
     else:
         dt, values, linenos, stated = _parse_text(lines, file, unit)
-        factor = accel_factor(stated)
-    accel = values * factor
-    check_samples(accel, linenos, file)
+    check_samples(values, linenos, file, stated)  # in the file's unit, before a conversion could overflow
+    accel = values * accel_factor(stated)
     return RawRecord(name=name or file.stem, dt_s=dt, accel_m_s2=accel, source=str(file))
 
 
@@ -149,6 +152,12 @@ def _read_text(file: Path) -> str:
         what = "is a directory, not a file" if file.is_dir() else "does not exist"
         raise RecordError(f"record file {where} {what} (looked in {where.parent})")
     try:
+        size = file.stat().st_size
+        if size > MAX_RECORD_BYTES:
+            raise RecordError(
+                f"record file {file} is {size} bytes, expected at most {MAX_RECORD_BYTES} "
+                "(a 10-minute record at 200 Hz is about 2 MB of text); is it a record?"
+            )
         data = file.read_bytes()
     except OSError as err:
         raise RecordError(f"cannot read record file {file}: {err.strerror or err}") from err
@@ -289,9 +298,9 @@ def _decide_unit(header_unit: str | None, given: str | None, file: Path) -> str:
     unit = header_unit or given
     if unit is None:
         raise RecordError(
-            f"{file}: the acceleration unit is not stated. State it in the header "
-            "(e.g. 't_s,accel_g', 'time_s,acc_m_s2', 't,acc_gal') or pass accel_unit "
-            "('g', 'm/s^2', 'cm/s^2'/'gal'; profile key record.accel_unit, CLI flag --accel-unit)"
+            f"{file}: the acceleration unit is not stated. State it in the file's header row "
+            "(e.g. 't_s,accel_g', 'time_s,acc_m_s2', 't,acc_gal'), or set the profile key record.accel_unit "
+            "('g', 'm/s^2', 'cm/s^2' or 'gal'; for dry-run, rig and run also --set record.accel_unit=g)"
         )
     return unit
 

@@ -8,6 +8,7 @@ event, then stop cleanly: drive disabled and announced, bus shut down.
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -35,6 +36,7 @@ def run_rig_command(
     stop_event: threading.Event | None = None,
     clock: Callable[[], float] = time.monotonic,
     on_ready: Callable[[VirtualRig], None] | None = None,
+    parent_pid: int | None = None,
 ) -> int:
     """Serve the virtual rig until Ctrl-C or ``stop_event``; return an exit status.
 
@@ -63,6 +65,9 @@ def run_rig_command(
         Wall clock (s).
     on_ready : callable, optional
         Called with the running rig once it serves (for a console's status line).
+    parent_pid : int, optional
+        Stop (drive disabled and announced) once this process is gone: a dry run that
+        started the rig and died must not leave it serving.
 
     Returns
     -------
@@ -95,7 +100,7 @@ def run_rig_command(
         try:
             if on_ready is not None:
                 on_ready(rig)
-            while not stop.wait(0.1) and rig.serving:
+            while not stop.wait(0.1) and rig.serving and _alive(parent_pid):
                 pass
         except KeyboardInterrupt:
             status = exit_codes.STOPPED
@@ -106,3 +111,16 @@ def run_rig_command(
     if rig.error is not None:
         raise rig.error
     return status
+
+
+def _alive(pid: int | None) -> bool:
+    """True while process ``pid`` exists (always True for None)."""
+    if pid is None or os.getppid() == pid:
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True

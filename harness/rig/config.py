@@ -10,12 +10,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
+from harness.input_limits import MAX_SEED
 from harness.rig.faults import fault_id_for
 from harness.schema import quantity
 
 FaultKind = Literal[
     "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
-    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop",
+    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip",
 ]
 FaultTarget = Literal["", "TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACTUATOR_STATUS", "RIG_STATUS"]
 
@@ -87,9 +88,19 @@ class ActuatorConfig:
 
 @dataclass(frozen=True)
 class DriveConfig:
-    """Drive-side enable logic and watchdog (wall clock)."""
+    """Drive-side enable logic and watchdog (wall clock).
+
+    In lockstep the harness paces the rig: a step waits for the harness's command, so a
+    host that is merely slow (a busy machine, a debugger) is not a dead harness. The
+    watchdog then uses ``lockstep_watchdog_timeout_s`` instead: still wall clock, so a
+    harness that died is caught, but long enough that host timing never trips a lockstep
+    dry run (no hardware moves in lockstep: the rig is virtual).
+    """
 
     watchdog_timeout_s: float = quantity(0.05, unit="s", gt=0.0, doc="commands/heartbeats older than this trip the drive")
+    lockstep_watchdog_timeout_s: float = quantity(
+        2.0, unit="s", gt=0.0, le=60.0, doc="the same watchdog in lockstep, where the harness paces the rig"
+    )
     decay_time_constant_s: float = quantity(0.02, unit="s", gt=0.0, doc="force decay to zero when the drive is not enabled")
 
 
@@ -112,7 +123,7 @@ class RigConfig:
     """The virtual rig (profile section ``rig``)."""
 
     physics_substep_s: float = quantity(0.0005, unit="s", gt=0.0, le=0.01, doc="actuator/plant sub-step; divides the step period")
-    seed: int = quantity(0, ge=0, doc="seed of every random draw (noise)")
+    seed: int = quantity(0, ge=0, le=MAX_SEED, doc="seed of every random draw (noise)")
     lockstep: bool = field(default=False, metadata={"doc": "start in lockstep mode"})
     history_s: float = quantity(60.0, unit="s", ge=0.0, le=3600.0, doc="length of the exact history ring")
     sensors: SensorsConfig = field(default_factory=SensorsConfig)

@@ -13,7 +13,9 @@ States (ACTUATOR_STATUS ``drive_state``): 0 OFF, 1 READY, 2 ENABLED, 3 FAULT, 4 
 - any -> ESTOP (latched, code 5) on an E-stop.
 - FAULT and ESTOP clear only on :meth:`Drive.reset` (RIG_CONTROL reset), back to OFF.
 
-Ages are measured on the wall clock the caller passes in (``now``), in lockstep too.
+Ages are measured on the wall clock the caller passes in (``now``), in lockstep too;
+there the virtual rig sets a longer timeout (``rig.drive.lockstep_watchdog_timeout_s``),
+because the harness paces the steps and a slow host is not a dead harness.
 """
 
 from __future__ import annotations

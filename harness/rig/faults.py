@@ -27,6 +27,8 @@ id      kind            targets           effect (param, SI)
 100     drive_fault     -                 drive goes to FAULT, fault code ``param`` (default 4)
 110     pressure_lost   -                 pressure_ok = 0; an active drive faults (code 3)
 120     estop           -                 the rig sends ESTOP (source 1) and the drive goes ESTOP
+130+t   sign_flip       0-3               signal number ``param`` (0, 1 or 2 in DBC order: 1 is
+                                          xdot_0 / ydot_b) is sent negated, a polarity fault
 ======  ==============  ================  =====================================================
 
 Drive fault codes in ACTUATOR_STATUS: see :mod:`harness.rig.drive`.
@@ -44,13 +46,16 @@ TARGETS = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACT
 SENSOR_TARGETS = 4
 KINDS = (
     "", "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
-    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop",
+    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip",
 )
 DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER = 1, 2, 3, 4, 5, 6, 7
 EXTRA_DELAY, BUS_SILENCE, DRIVE_FAULT, PRESSURE_LOST, ESTOP = 8, 9, 10, 11, 12
-_SENSOR_ONLY = (STUCK, SPIKE, NOISE_BURST)
-_TARGETED = (DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER)
+SIGN_FLIP = 13
+_SENSOR_ONLY = (STUCK, SPIKE, NOISE_BURST, SIGN_FLIP)
+_TARGETED = (DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER, SIGN_FLIP)
 MAX_EXTRA_DELAY_S = 1.0
+#: Signals per sensor message (every sensor message carries three): valid ``sign_flip`` params.
+SIGNALS_PER_SENSOR_MESSAGE = 3
 
 
 class FaultError(HarnessError, ValueError):
@@ -59,7 +64,8 @@ class FaultError(HarnessError, ValueError):
 
 def _check(kind: int, target: int) -> None:
     if kind not in range(1, len(KINDS)):
-        raise FaultError(f"fault kind {kind}; expected 1..{len(KINDS) - 1} (fault ids 10..120, see harness.rig.faults)")
+        last = len(KINDS) - 1
+        raise FaultError(f"fault kind {kind}; expected 1..{last} (fault ids 10..{10 * last}, see harness.rig.faults)")
     if kind in _TARGETED:
         limit = SENSOR_TARGETS if kind in _SENSOR_ONLY else len(TARGETS)
         if not 0 <= target < limit:
@@ -68,6 +74,12 @@ def _check(kind: int, target: int) -> None:
             )
     elif target != 0:
         raise FaultError(f"fault {KINDS[kind]} takes no target; found target {target} (fault id {10 * kind + target})")
+
+
+def sign_flip_signal(param: float) -> int:
+    """The signal index a ``sign_flip`` fault's ``param`` names, or -1 if it names none (0, 1 or 2)."""
+    index = int(param) if param == param and float(param).is_integer() else -1
+    return index if 0 <= index < SIGNALS_PER_SENSOR_MESSAGE else -1
 
 
 def decode_fault_id(fault_id: int) -> tuple[int, int]:
@@ -157,6 +169,9 @@ class FaultSet:
         except FaultError:
             self.unknown_ids += 1
             return False
+        if kind == SIGN_FLIP and sign_flip_signal(param) < 0:
+            self.unknown_ids += 1  # names no signal of the message
+            return False
         if kind == SPIKE:
             if not self._runtime[kind, target] or self._runtime_param[kind, target] != param:
                 self._spike_pending[target] = True
@@ -197,6 +212,12 @@ class FaultSet:
         """True when ``kind`` is active on ``target``."""
         return bool(self.active[kind, target])
 
+    def flipped_signal(self, target: int) -> int:
+        """Index of the signal of sensor message ``target`` sent negated, or -1 (no sign flip active)."""
+        if not self.active[SIGN_FLIP, target]:
+            return -1
+        return sign_flip_signal(float(self.param[SIGN_FLIP, target]))
+
     @property
     def extra_delay_s(self) -> float:
         """Extra sensor delay (s), clipped to 0..1 s."""
@@ -215,6 +236,11 @@ def schedule_from(specs) -> tuple[ScheduledFault, ...]:
     result = []
     for spec in specs:
         kind, target = decode_fault_id(fault_id_for(spec.kind, spec.target))
+        if kind == SIGN_FLIP and sign_flip_signal(spec.param) < 0:
+            raise FaultError(
+                f"fault sign_flip on {spec.target} with param {spec.param!r}; expected the index of the signal "
+                f"to negate: 0, 1 or 2 in DBC order (1 is the velocity of TABLE_SENSORS and BASE_SENSORS)"
+            )
         end = spec.start_s + spec.duration_s if spec.duration_s > 0 else float("inf")
         result.append(ScheduledFault(kind, target, spec.start_s, end, spec.param))
     return tuple(result)

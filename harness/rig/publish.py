@@ -3,7 +3,7 @@
 Every frame the rig sends goes through :meth:`RigPublisher.send`, which honours bus
 silence, dropout, corrupted CRC and repeated/skipped rolling counters
 (:mod:`harness.rig.faults`). Sensor messages go through :meth:`RigPublisher.sensor`
-first, which applies stuck values, spikes and noise bursts and saturates every
+first, which applies stuck values, sign flips, spikes and noise bursts and saturates every
 value at its DBC range (a real transducer saturates; the codec would refuse it).
 Frames are the writer's preallocated :class:`~drivers.writer.TxFrame` objects.
 """
@@ -13,6 +13,7 @@ from __future__ import annotations
 import can
 
 from drivers.e2e import COUNTER_MODULO
+from drivers.reader import PANEL_SOURCE
 from drivers.writer import RigWriter, TxFrame
 from harness.rig import faults as F
 from harness.rig.faults import TARGETS, FaultSet
@@ -38,6 +39,8 @@ class RigPublisher:
         self._ranges = tuple(tuple((s.minimum, s.maximum) for s in tx.codec.signals) for tx in self.frames)
         self._values = tuple([0.0] * len(tx.codec.signals) for tx in self.frames)
         self._estop_values = [1.0, 1.0, 0.0]
+        self._panel_values = [0.0, float(PANEL_SOURCE), 0.0]  # active, source 3 (panel), reason
+        self.panel_sent = 0
         self.sent = [0] * len(TARGETS)
         self.suppressed = 0
 
@@ -55,6 +58,9 @@ class RigPublisher:
             return self.send(target, values, now)  # the values last sent, again
         burst = faults.param[F.NOISE_BURST, target] if faults.is_on(F.NOISE_BURST, target) else 0.0
         self.sensors.read(MESSAGE_COLUMNS[target], values, abs(burst))
+        flipped = faults.flipped_signal(target)
+        if flipped >= 0:
+            values[flipped] = -values[flipped]
         values[0] += faults.take_spike(target)
         self._clip(target)
         return self.send(target, values, now)
@@ -80,6 +86,21 @@ class RigPublisher:
             self.suppressed += 1
             return False
         return self.writer.send_frame(self._estop, self._estop_values, now)
+
+    def panel(self, now: float, pressed: bool = False) -> bool:
+        """Send the E-stop panel's frame (source 3): its heartbeat with ``active=0``, or a press.
+
+        The panel is a node of its own on a real rig; the virtual rig emulates it on its own
+        ESTOP frame (one rolling counter for the rig's and the panel's frames on this ID).
+        """
+        if self.faults.is_on(F.BUS_SILENCE):
+            self.suppressed += 1
+            return False
+        self._panel_values[0] = 1.0 if pressed else 0.0
+        ok = self.writer.send_frame(self._estop, self._panel_values, now)
+        if ok:
+            self.panel_sent += 1
+        return ok
 
     def send(self, target: int, values: list[float], now: float) -> bool:
         """Send message ``target`` with ``values``, applying the frame-level faults."""

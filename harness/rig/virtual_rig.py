@@ -116,7 +116,14 @@ class VirtualRig:
         self.publisher = RigPublisher(writer, self.faults, self.sensors)
         self.inbox = RigInbox(self.bus, protocol)
         self.history = History(int(math.ceil(cfg.history_s / self.h)), self.table.y.size)
-        self.schedule = PublishSchedule(can_config or CanConfig(), self.h, self.step_period_s)
+        can_settings = can_config or CanConfig()
+        self.schedule = PublishSchedule(can_settings, self.h, self.step_period_s)
+        #: The emulated E-stop panel is plugged in and sends its heartbeat (tests unplug it).
+        self.panel_connected = True
+        #: The emulated panel's button is pressed (its frames then carry active=1).
+        self.panel_pressed = False
+        self._panel_period_s = 1.0 / can_settings.estop_panel_rate_hz
+        self._panel_every_steps = max(1, int(round(self._panel_period_s / self.step_period_s)))
         self.pinned_lockstep = bool(cfg.lockstep if lockstep is None else lockstep)
         self.lockstep = self.pinned_lockstep
         self._truth = np.zeros(len(SIGNALS))
@@ -141,6 +148,8 @@ class VirtualRig:
         self._announce = self.lockstep
         self._last_drive_state = D.OFF
         self._last_status_time = -math.inf
+        self._last_panel_time = -math.inf
+        self._panel_next_step = 0
         self.table.truth(self._truth, 0.0)
         self.sensors.reset(self._truth)
         self._update_faults()
@@ -176,6 +185,8 @@ class VirtualRig:
         code = 0
         if faults.is_on(F.DRIVE_FAULT):
             code = int(min(max(faults.param[F.DRIVE_FAULT, 0], 0.0), 255.0)) or D.FAULT_INJECTED
+        drive = self.config.drive
+        self.drive.timeout_s = drive.lockstep_watchdog_timeout_s if self.lockstep else drive.watchdog_timeout_s
         self.drive.update(now, self.pressure_ok, code)
 
     # --------------------------------------------------------------- physics
@@ -216,8 +227,17 @@ class VirtualRig:
         self._publish_status(now)
         if self.faults.is_on(F.ESTOP):
             pub.estop(now)
+        if self.step_index >= self._panel_next_step:  # on the step grid: ages are judged on the loop's time
+            self._panel_next_step = self.step_index + self._panel_every_steps
+            self._publish_panel(now)
         self._publish_rig_status(now)
         self._last_drive_state = self.drive.state
+
+    def _publish_panel(self, now: float) -> None:
+        """The emulated E-stop panel's frame (heartbeat, or a press), if it is plugged in."""
+        if self.panel_connected:
+            self._last_panel_time = now
+            self.publisher.panel(now, self.panel_pressed)
 
     def _publish_status(self, now: float) -> None:
         noise = self.config.actuator.force_noise_N
@@ -300,6 +320,8 @@ class VirtualRig:
         if self.lockstep and now - self._last_status_time >= self.schedule.rig_status_period_s:
             self._last_status_time = now  # idle beacon: a harness that joins late still finds the rig
             self._publish_rig_status(now)
+        if now - self._last_panel_time >= self._panel_period_s:  # the panel's own clock (idle lockstep too)
+            self._publish_panel(now)
 
     def service(self, now: float, wait_s: float = 0.0) -> int:
         """In real time, advance to ``now`` and publish what is due; then handle the waiting frames.

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from harness.safety.comms_detectors import FlagDetector
 from harness.safety.config import ActuatorConfig, ForceConfig
-from harness.safety.detector_base import Detector, LowPass, Persistence
+from harness.safety.detector_base import TIME_EPS_S, Detector, LowPass, Persistence
 from harness.safety.events import ACTION_BY_NAME, Action
 from harness.safety.health import TickHealth
 
@@ -59,7 +59,7 @@ class ActuatorStatusStale(Detector):
 
     NAME = "actuator_status_stale"
     ACTION = Action.TRIP
-    DETECTS = "actuator status frame older than max_status_age_s"
+    DETECTS = "actuator status frame older than max_status_age_s, or its age not finite or negative"
     BOUND = "first tick with age > max_status_age_s"
     RESET = "explicit reset, refused while still stale"
 
@@ -71,11 +71,11 @@ class ActuatorStatusStale(Detector):
 
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
         """True while the status is too old."""
-        return not health.actuator_status_age_s <= self.max_age_s
+        return not 0.0 <= health.actuator_status_age_s <= self.max_age_s + TIME_EPS_S  # NaN or negative: invalid, trips
 
     def detail(self, health: TickHealth) -> str:
         """Age and limit."""
-        return f"actuator status age {health.actuator_status_age_s * 1e3:.3g} ms, expected <= {self.max_age_s * 1e3:.3g} ms"
+        return f"actuator status age {health.actuator_status_age_s * 1e3:.3f} ms, expected 0 <= age <= {self.max_age_s * 1e3:.3f} ms"
 
     def present(self, health: TickHealth) -> str:
         """Still stale?"""

@@ -156,8 +156,10 @@ class BusErrorPassive(FlagDetector):
 class BusOff(FlagDetector):
     """The CAN controller is bus-off.
 
-    Detects: ``health.bus_off`` (the loop infers it from error frames and send
-    failures where the backend does not report it). Bound: the same tick.
+    Detects: ``health.bus_off``, from bus-off error frames (SocketCAN's error-class
+    bits; other backends deliver no error frames, so there bus-off shows only as send
+    failures, which trip ``bus_send_failures``, and as silence, which trips
+    ``sensor_stale``). Bound: the same tick.
     Action: TRIP. Reset: explicit reset, refused while bus-off.
     """
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
+from harness.input_limits import MAX_EVENT_CAPACITY, MAX_WINDOW_COUNT
 from harness.schema import quantity
 
 #: Actions a detector with a configurable action may take.
@@ -44,6 +45,9 @@ class ForceConfig:
     tracking_time_s: float = quantity(0.1, unit="s", gt=0, doc="how long the tracking error may persist")
     actuator_time_constant_s: float = quantity(0.01, unit="s", ge=0, doc="first-order lag of the actuator (0: none)")
     tracking_action: DetectorActionName = field(default="trip", metadata={"doc": "action on a force-tracking fault"})
+    actuator_rating_N: float | None = quantity(
+        None, unit="N", gt=0, doc="rated force of the real rig's actuator; max_force_N may not exceed it (null: not declared)",
+    )
 
 
 @dataclass(frozen=True)
@@ -55,24 +59,36 @@ class SensorConfig:
     velocity_range_m_s: float = quantity(1.5, unit="m/s", gt=0, doc="|xdot_0| and |ydot_b| beyond this are faults")
     jump_limit_m: float = quantity(0.005, unit="m", gt=0, doc="largest displacement change between samples")
     jump_limit_m_s: float = quantity(0.2, unit="m/s", gt=0, doc="largest velocity change between samples")
-    stuck_samples: int = quantity(50, ge=2, doc="consecutive bit-identical samples that mean a stuck sensor")
-    stuck_table_speed_m_s: float = quantity(0.01, unit="m/s", gt=0, doc="|xdot_0| above which the table is moving")
+    # A stuck channel trips at rest too: sensor noise through the conditioning always moves the last
+    # bits. 50 samples keep a healthy channel's false-alarm rate below 1e-9 per run while its noise
+    # std is at least 0.8 of its quantization step (docs/SAFETY.md, "Stuck sensors" derives it).
+    stuck_samples: int = quantity(
+        50, ge=2, le=1_000_000, doc="consecutive bit-identical fresh samples that mean a stuck sensor (at rest too)"
+    )
     disagree_tolerance_m_s: float = quantity(0.05, unit="m/s", gt=0, doc="|filtered dx/dt - filtered v| allowed")
     disagree_time_s: float = quantity(0.05, unit="s", gt=0, doc="how long the disagreement may persist")
     disagree_filter_s: float = quantity(0.02, unit="s", gt=0, doc="time constant of the low-pass on both signals")
+    sign_flip_floor_m_s: float = quantity(
+        0.002, unit="m/s", gt=0, le=1.0,
+        doc="|filtered dx/dt| and |filtered v| above which opposite signs count as a sign flip",
+    )
+    sign_flip_time_s: float = quantity(
+        0.02, unit="s", gt=0, le=1.0, doc="how long opposite signs (both above the floor) may persist",
+    )
 
 
 @dataclass(frozen=True)
 class CommsConfig:
     """Rates of CAN faults tolerated, each as "more than N in a sliding window"."""
 
-    max_e2e_rejects: int = quantity(5, ge=0, doc="counter/CRC rejections allowed per window")
+    # Each window preallocates max+1 slots: MAX_WINDOW_COUNT caps them (harness/input_limits.py says why).
+    max_e2e_rejects: int = quantity(5, ge=0, le=MAX_WINDOW_COUNT, doc="counter/CRC rejections allowed per window")
     e2e_window_s: float = quantity(1.0, unit="s", gt=0, doc="sliding window for E2E rejections")
-    max_error_frames: int = quantity(10, ge=0, doc="bus error frames allowed per window")
+    max_error_frames: int = quantity(10, ge=0, le=MAX_WINDOW_COUNT, doc="bus error frames allowed per window")
     error_frame_window_s: float = quantity(1.0, unit="s", gt=0, doc="sliding window for error frames")
     error_frame_action: DetectorActionName = field(default="safe_stop", metadata={"doc": "action on too many error frames"})
     error_passive_action: DetectorActionName = field(default="safe_stop", metadata={"doc": "action on error-passive"})
-    max_send_failures: int = quantity(2, ge=0, doc="failed sends (ENOBUFS) allowed per window")
+    max_send_failures: int = quantity(2, ge=0, le=MAX_WINDOW_COUNT, doc="failed sends (ENOBUFS) allowed per window")
     send_failure_window_s: float = quantity(1.0, unit="s", gt=0, doc="sliding window for failed sends")
 
 
@@ -88,8 +104,83 @@ class RunConfig:
     """Lifecycle and loop-health settings."""
 
     stopping_ramp_s: float = quantity(0.5, unit="s", gt=0, doc="time over which STOPPING ramps the force to zero")
-    max_consecutive_overruns: int = quantity(3, ge=1, doc="consecutive loop overruns that trip the run")
-    event_capacity: int = quantity(256, ge=8, doc="size of the preallocated event ring")
+    max_stall_s: float = quantity(
+        0.02, unit="s", gt=0, le=1.0,
+        doc="longest time the loop may go without writing a command; a longer stall trips (docs/SAFETY.md derives it)",
+    )
+    event_capacity: int = quantity(256, ge=8, le=MAX_EVENT_CAPACITY, doc="size of the preallocated event ring")
+
+
+#: What a trip may do besides zeroing the force: ``disable`` (zero force, drive disabled; always),
+#: ``estop`` (assert the ESTOP frame, source 4 supervisor, repeated while TRIPPED), ``stop_table``
+#: (RIG_CONTROL stop to the table controller, where the run has a table link).
+TripActionName = Literal["disable", "estop", "stop_table"]
+#: The classes of checks a trip action is configured for (see :data:`TRIP_CLASS_OF`).
+TRIP_CLASSES: tuple[str, ...] = ("stroke", "sensor", "comms", "actuator", "loop", "operator", "internal")
+#: Check name -> class of check, for every check that can trip.
+TRIP_CLASS_OF: dict[str, str] = {
+    "stroke_hard": "stroke", "stroke_predictive": "stroke",
+    "sensor_invalid": "sensor", "sensor_stale": "sensor", "sensor_jump": "sensor", "sensor_stuck": "sensor",
+    "sensor_disagree": "sensor", "sensor_sign_flip": "sensor",
+    "e2e_rejects": "comms", "bus_error_frames": "comms", "bus_error_passive": "comms", "bus_off": "comms",
+    "bus_send_failures": "comms", "bus_gone": "comms", "foreign_command": "comms",
+    "drive_fault": "actuator", "hydraulic_pressure": "actuator", "actuator_status_stale": "actuator",
+    "force_tracking": "actuator",
+    "loop_stall": "loop", "loop_timing": "loop",
+    "estop": "operator", "estop_lost": "operator", "operator_stop": "operator", "operator_trip": "operator",
+    "tick_exception": "internal", "controller_output": "internal",
+}
+_DISABLE_ONLY = ("disable",)
+
+
+def _actions(doc: str) -> tuple[TripActionName, ...]:
+    return quantity(_DISABLE_ONLY, min_len=1, doc=doc)
+
+
+@dataclass(frozen=True)
+class TripActionsConfig:
+    """What a trip does beyond the controller, per class of check (the profile's ``safety.trip_actions``).
+
+    Each class takes a list from ``disable``, ``estop``, ``stop_table``, as the limit
+    detectors of an MTS controller do. ``disable`` (zero force and drive disable, sent first
+    in the trip tick) is the default and the minimum: :func:`check_config` refuses a list
+    without it. ``estop`` sends the ESTOP frame (source 4, supervisor) in the trip tick,
+    after the disable command, and repeats it at ``can.estop_rate_hz`` while TRIPPED.
+    ``stop_table`` sends RIG_CONTROL stop in the trip tick where the run has a table link
+    (docs/SAFETY.md, "From a trip to each device").
+    """
+
+    stroke: tuple[TripActionName, ...] = _actions("on stroke_hard, stroke_predictive")
+    sensor: tuple[TripActionName, ...] = _actions("on the sensor_* checks")
+    comms: tuple[TripActionName, ...] = _actions("on the e2e_rejects, bus_* and foreign_command checks")
+    actuator: tuple[TripActionName, ...] = _actions("on drive_fault, hydraulic_pressure, actuator_status_stale, force_tracking")
+    loop: tuple[TripActionName, ...] = _actions("on loop_stall, loop_timing")
+    operator: tuple[TripActionName, ...] = _actions("on estop, estop_lost, operator_trip (operator_stop when its action trips)")
+    internal: tuple[TripActionName, ...] = _actions("on tick_exception, controller_output")
+
+    def for_check(self, name: str) -> tuple[TripActionName, ...]:
+        """The actions of the check called ``name`` (``disable`` alone for a name of no class)."""
+        group = TRIP_CLASS_OF.get(name)
+        return getattr(self, group) if group is not None else _DISABLE_ONLY
+
+
+@dataclass(frozen=True)
+class EStopConfig:
+    """The operator E-stop panel's liveness (the profile's ``safety.estop``).
+
+    The panel sends ESTOP frames (source 3) with ``active=0`` at ``can.estop_panel_rate_hz``
+    while not pressed, so a panel that is unplugged or dead is told from one that is not
+    pressed. 0.2 s is four periods at 20 Hz: three lost frames in a row, plus one period of
+    scheduling, are ridden through (docs/SAFETY.md, "E-stop panel liveness").
+    """
+
+    panel_required: bool = field(
+        default=True,
+        metadata={"doc": "a live E-stop panel is required to arm and to run; false is a weakening the run records"},
+    )
+    max_panel_age_s: float = quantity(
+        0.2, unit="s", gt=0, le=10.0, doc="oldest panel ESTOP frame accepted; older trips estop_lost",
+    )
 
 
 @dataclass(frozen=True)
@@ -102,6 +193,8 @@ class SafetyConfig:
     comms: CommsConfig = field(default_factory=CommsConfig)
     actuator: ActuatorConfig = field(default_factory=ActuatorConfig)
     run: RunConfig = field(default_factory=RunConfig)
+    trip_actions: TripActionsConfig = field(default_factory=TripActionsConfig)
+    estop: EStopConfig = field(default_factory=EStopConfig)
 
 
 def _positive_problems(config: SafetyConfig) -> list[str]:
@@ -109,7 +202,7 @@ def _positive_problems(config: SafetyConfig) -> list[str]:
     problems = []
     groups = {
         "stroke": config.stroke, "force": config.force, "sensors": config.sensors,
-        "comms": config.comms, "actuator": config.actuator, "run": config.run,
+        "comms": config.comms, "actuator": config.actuator, "run": config.run, "estop": config.estop,
     }
     may_be_zero = {"stop_time_s", "actuator_time_constant_s", "max_e2e_rejects", "max_error_frames", "max_send_failures"}
     for group_name, group in groups.items():
@@ -148,6 +241,26 @@ def _stroke_problems(stroke: StrokeConfig, sensors: SensorConfig) -> list[str]:
     return problems
 
 
+def _stall_problems(config: SafetyConfig) -> list[str]:
+    """The stall budget must fit the predictive stroke limit's look-ahead (docs/SAFETY.md, "Stall budget").
+
+    The predictive limit trips when ``x_b + xdot_b * stop_time_s`` reaches the hard limit, so it
+    covers a blind time of ``stop_time_s`` minus the actuator's lag. A stall of the loop and the
+    age of the newest sensor sample both add blind time, so together they must fit inside it.
+    """
+    stroke, sensors, run = config.stroke, config.sensors, config.run
+    cover_s = stroke.stop_time_s - config.force.actuator_time_constant_s
+    blind_s = run.max_stall_s + sensors.max_sensor_age_s
+    if blind_s > cover_s * (1.0 + 1e-9):
+        return [
+            f"run.max_stall_s ({run.max_stall_s * 1e3:.1f} ms) + sensors.max_sensor_age_s "
+            f"({sensors.max_sensor_age_s * 1e3:.1f} ms) = {blind_s * 1e3:.1f} ms of blind time exceeds what the "
+            f"predictive stroke limit covers, stroke.stop_time_s - force.actuator_time_constant_s = {cover_s * 1e3:.1f} ms: "
+            "lower the stall budget or the sensor age, or lengthen stop_time_s (docs/SAFETY.md, Stall budget)"
+        ]
+    return []
+
+
 def _force_problems(force: ForceConfig, run: RunConfig) -> list[str]:
     problems = []
     if force.tracking_tolerance_N >= 2 * force.max_force_N:
@@ -161,6 +274,24 @@ def _force_problems(force: ForceConfig, run: RunConfig) -> list[str]:
             f"run.stopping_ramp_s ({run.stopping_ramp_s:g} s) is shorter than max_force_N / max_force_rate_N_per_s "
             f"({ramp_needed:g} s): the rate limit, not the ramp, would set the stop"
         )
+    return problems
+
+
+def _trip_action_problems(actions: TripActionsConfig) -> list[str]:
+    """Every class must keep ``disable``; names must be known and given once."""
+    problems = []
+    for group in TRIP_CLASSES:
+        chosen = getattr(actions, group)
+        unknown = [name for name in chosen if name not in ("disable", "estop", "stop_table")]
+        if unknown:
+            problems.append(f"trip_actions.{group} names {unknown!r}, expected disable, estop or stop_table")
+        if "disable" not in chosen:
+            problems.append(
+                f"trip_actions.{group} is {list(chosen)!r}: disable cannot be removed (a trip always commands "
+                "zero force with the drive disabled first)"
+            )
+        if len(set(chosen)) != len(chosen):
+            problems.append(f"trip_actions.{group} is {list(chosen)!r}, expected each action once")
     return problems
 
 
@@ -180,4 +311,7 @@ def check_config(config: SafetyConfig) -> list[str]:
     problems = _positive_problems(config)
     if problems:
         return problems
-    return _stroke_problems(config.stroke, config.sensors) + _force_problems(config.force, config.run)
+    return (
+        _stroke_problems(config.stroke, config.sensors) + _force_problems(config.force, config.run)
+        + _stall_problems(config) + _trip_action_problems(config.trip_actions)
+    )

@@ -52,7 +52,7 @@ CHECK_NAMES: tuple[str, ...] = (
     "hydraulic_pressure",
     "actuator_status_stale",
     "force_tracking",
-    "loop_overruns",
+    "loop_stall",  # bit 21; was "loop_overruns" (consecutive late ticks) before the stall budget
     "loop_timing",
     "tick_exception",
     "controller_output",
@@ -60,6 +60,8 @@ CHECK_NAMES: tuple[str, ...] = (
     "operator_stop",
     "operator_trip",
     "stop_ramp",
+    "sensor_sign_flip",  # bit 29; appended: runs after sensor_stuck, before sensor_disagree (supervisor order)
+    "estop_lost",  # bit 30; appended: the E-stop panel's heartbeat is older than safety.estop.max_panel_age_s
 )
 
 _INDEX: dict[str, int] = {name: index for index, name in enumerate(CHECK_NAMES)}

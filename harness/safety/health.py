@@ -43,10 +43,16 @@ class TickHealth:
         Age of the newest actuator status frame (s).
     measured_force_N : float
         Force reported by the actuator's load cell (N).
-    consecutive_overruns : int
-        Ticks in a row that missed their deadline (0 after an on-time tick).
+    stall_s : float
+        Time since the previous tick wrote its command (s); 0 in lockstep, where the
+        rig waits for the loop. Above one period when deadlines were missed.
+    missed_periods : int
+        Whole periods missed before this tick (0 on time).
     estop : bool
         The operator E-stop frame is asserted.
+    estop_panel_age_s : float
+        Age of the newest intact ESTOP frame from the operator panel (source 3, s); infinity
+        before the first, NaN for an unusable timestamp.
     operator_stop : bool
         The operator asked for a controlled stop (first Ctrl-C).
     operator_trip : bool
@@ -71,7 +77,9 @@ class TickHealth:
     pressure_ok: bool = True
     actuator_status_age_s: float = 0.0
     measured_force_N: float = 0.0
-    consecutive_overruns: int = 0
+    stall_s: float = 0.0
+    missed_periods: int = 0
     estop: bool = False
+    estop_panel_age_s: float = 0.0
     operator_stop: bool = False
     operator_trip: bool = False

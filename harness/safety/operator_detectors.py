@@ -3,44 +3,59 @@
 from __future__ import annotations
 
 from harness.safety.comms_detectors import FlagDetector
-from harness.safety.config import RunConfig
+from harness.safety.config import EStopConfig, RunConfig
 from harness.safety.detector_base import Detector
 from harness.safety.events import Action
 from harness.safety.health import TickHealth
 
 
-class LoopOverruns(Detector):
-    """The loop cannot keep its rate.
+#: What to do about a loop that the host keeps from running (printed with the trip).
+HOST_TIMING_REMEDIES = (
+    "remedies: a lower --rate, --lockstep for a dry run, real-time priority "
+    "(loop.realtime.fifo_priority with an rtprio limit or CAP_SYS_NICE), or a quieter machine"
+)
 
-    Detects: ``health.consecutive_overruns >= max_consecutive_overruns``.
-    Bound: the tick that completes the N-th consecutive overrun. Action: TRIP.
-    Reset: explicit reset, refused while the loop still reports N or more (its
-    count restarts on an on-time tick).
+
+class LoopStall(Detector):
+    """The loop went longer than the stall budget without writing a command.
+
+    Detects: ``health.stall_s > max_stall_s``, where ``stall_s`` is the time since
+    the previous tick's command (the loop measures it on waking; missed time, not a
+    count of late ticks: one 45 ms stall at 500 Hz is 22 missed periods).
+    Bound: the first tick after the stall (a stalled loop cannot act; during the
+    stall the drive-side watchdog is the backstop). Action: TRIP.
+    Shorter stalls are ridden through by the loop: counted, recorded as an event
+    and shown on the console.
+    Reset: explicit reset (the stall is over once the loop runs again).
     """
 
-    NAME = "loop_overruns"
+    NAME = "loop_stall"
     ACTION = Action.TRIP
-    DETECTS = "max_consecutive_overruns ticks in a row missed their deadline"
-    BOUND = "the N-th consecutive overrun"
-    RESET = "explicit reset, refused while the count is still >= N"
+    DETECTS = "the loop went longer than max_stall_s without writing a command"
+    BOUND = "first tick after the stall"
+    RESET = "explicit reset"
 
-    __slots__ = ("limit",)
+    __slots__ = ("limit_s",)
 
     def __init__(self, config: RunConfig) -> None:
         super().__init__()
-        self.limit = config.max_consecutive_overruns
+        self.limit_s = config.max_stall_s
 
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
-        """True while the loop reports at least N consecutive overruns."""
-        return health.consecutive_overruns >= self.limit
+        """True on the tick that ends a stall longer than the budget."""
+        return health.stall_s > self.limit_s
 
     def detail(self, health: TickHealth) -> str:
-        """Count and limit."""
-        return f"{health.consecutive_overruns} consecutive overruns, expected fewer than {self.limit}"
+        """How long, against the budget, and what to do: this is host timing, not the rig."""
+        return (
+            f"the loop went {health.stall_s * 1e3:.1f} ms without a command ({health.missed_periods} missed periods), "
+            f"expected at most {self.limit_s * 1e3:.1f} ms (the stall budget): the host did not run the loop in time; "
+            + HOST_TIMING_REMEDIES
+        )
 
     def present(self, health: TickHealth) -> str:
-        """Still overrunning?"""
-        return self.detail(health) if self.update(0.0, 0.0, health) else ""
+        """A stall is over once the loop runs again."""
+        return ""
 
 
 class EStop(FlagDetector):
@@ -64,19 +79,58 @@ class EStop(FlagDetector):
         return health.estop
 
 
+class EStopLost(Detector):
+    """The E-stop panel's heartbeat stopped: an unplugged or dead panel could not stop the run.
+
+    Detects: the newest intact ESTOP frame from the panel (source 3) older than
+    ``max_panel_age_s``, or its age not finite or negative (no frame yet, a clock fault).
+    Bound: the first tick with the age above the bound. Action: TRIP. Not evaluated when
+    ``panel_required`` is false (a weakening the run records). Reset: explicit reset,
+    refused while the panel is still silent.
+    """
+
+    NAME = "estop_lost"
+    ACTION = Action.TRIP
+    DETECTS = "E-stop panel frames (source 3) older than max_panel_age_s, or their age not finite or negative"
+    BOUND = "first tick with age > max_panel_age_s"
+    RESET = "explicit reset, refused while the panel is still silent"
+
+    __slots__ = ("limit_s", "required")
+
+    def __init__(self, config: EStopConfig) -> None:
+        super().__init__()
+        self.limit_s = config.max_panel_age_s
+        self.required = config.panel_required
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True while a required panel's newest frame is too old (or has no valid age)."""
+        return self.required and not 0.0 <= health.estop_panel_age_s <= self.limit_s
+
+    def detail(self, health: TickHealth) -> str:
+        """The panel's age against the bound."""
+        return (
+            f"E-stop panel silent: newest panel frame {health.estop_panel_age_s * 1e3:.1f} ms old, "
+            f"expected 0 <= age <= {self.limit_s * 1e3:.1f} ms (is the panel plugged in?)"
+        )
+
+    def present(self, health: TickHealth) -> str:
+        """Still present while the panel is silent."""
+        return self.detail(health) if self.update(0.0, 0.0, health) else ""
+
+
 class OperatorStop(FlagDetector):
     """The operator asked for a controlled stop (first Ctrl-C).
 
     Detects: ``health.operator_stop``. Bound: the same tick. Action: SAFE_STOP
-    (ARMED/RUNNING -> STOPPING; ignored in other states). Reset: the loop clears
-    the flag; arming is refused while it is set.
+    (ARMED/RUNNING -> STOPPING; ignored in other states). Reset: none within the
+    command (the request lasts until it ends); arming is refused while it is set.
     """
 
     NAME = "operator_stop"
     ACTION = Action.SAFE_STOP
     WHAT = "operator asked for a stop"
     DETECTS = "operator stop request (first Ctrl-C)"
-    RESET = "the loop clears the request; arming refused while set"
+    RESET = "none within the command (the request lasts until it ends); arming refused while set"
 
     __slots__ = ()
 

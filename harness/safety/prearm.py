@@ -25,16 +25,17 @@ PRE_ARM_CHECKS: tuple[str, ...] = (
     "bus_ok",
     "estop_clear",
     "no_operator_request",
+    "estop_panel_live",
 )
 
 
 def _sensor_failures(config: SafetyConfig, health: TickHealth) -> list[str]:
     failed = []
     max_age = config.sensors.max_sensor_age_s
-    if not (health.table_age_s <= max_age and health.base_age_s <= max_age):
+    if not (0.0 <= health.table_age_s <= max_age and 0.0 <= health.base_age_s <= max_age):
         failed.append(
-            f"sensors_fresh: table age {health.table_age_s:.3g} s, base age {health.base_age_s:.3g} s, "
-            f"expected <= {max_age:g} s"
+            f"sensors_fresh: table age {health.table_age_s * 1e3:.2f} ms, base age {health.base_age_s * 1e3:.2f} ms, "
+            f"expected 0 <= age <= {max_age * 1e3:.2f} ms"
         )
     meas = health.meas
     values = (meas.table_displacement_m, meas.table_velocity_m_s, meas.base_displacement_m, meas.base_velocity_m_s)
@@ -58,8 +59,11 @@ def _actuator_failures(config: SafetyConfig, health: TickHealth) -> list[str]:
     if not health.pressure_ok:
         failed.append("hydraulic_pressure: pressure not ok, expected ok")
     max_age = config.actuator.max_status_age_s
-    if not health.actuator_status_age_s <= max_age:
-        failed.append(f"actuator_status_fresh: status age {health.actuator_status_age_s:.3g} s, expected <= {max_age:g} s")
+    if not 0.0 <= health.actuator_status_age_s <= max_age:
+        failed.append(
+            f"actuator_status_fresh: status age {health.actuator_status_age_s * 1e3:.2f} ms, "
+            f"expected 0 <= age <= {max_age * 1e3:.2f} ms"
+        )
     if health.foreign_command:
         failed.append("no_foreign_command: another node sends on the actuator command ID, expected none")
     return failed
@@ -81,6 +85,18 @@ def _bus_and_operator_failures(health: TickHealth) -> list[str]:
     return failed
 
 
+def _panel_failures(config: SafetyConfig, health: TickHealth) -> list[str]:
+    """No arming without a live E-stop panel, unless the profile says explicitly that none is wired."""
+    estop = config.estop
+    if not estop.panel_required or 0.0 <= health.estop_panel_age_s <= estop.max_panel_age_s:
+        return []
+    return [
+        f"estop_panel_live: newest E-stop panel frame {health.estop_panel_age_s * 1e3:.1f} ms old, expected "
+        f"0 <= age <= {estop.max_panel_age_s * 1e3:.1f} ms (plug the panel in; safety.estop.panel_required: false "
+        "declares that none is wired)"
+    ]
+
+
 def pre_arm_failures(config: SafetyConfig, health: TickHealth) -> tuple[str, ...]:
     """Evaluate every pre-arm check; return the failures (empty when arming is allowed).
 
@@ -100,4 +116,5 @@ def pre_arm_failures(config: SafetyConfig, health: TickHealth) -> tuple[str, ...
     failed += _sensor_failures(config, health)
     failed += _actuator_failures(config, health)
     failed += _bus_and_operator_failures(health)
+    failed += _panel_failures(config, health)
     return tuple(failed)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from harness.safety.config import SensorConfig
-from harness.safety.detector_base import Detector, LowPass, Persistence
+from harness.safety.detector_base import TIME_EPS_S, Detector, LowPass, Persistence
 from harness.safety.events import Action
 from harness.safety.health import TickHealth
 
@@ -89,7 +89,7 @@ class SensorStale(Detector):
 
     NAME = "sensor_stale"
     ACTION = Action.TRIP
-    DETECTS = "table or base-mat sensor frame older than max_sensor_age_s"
+    DETECTS = "table or base-mat sensor frame older than max_sensor_age_s, or its age not finite or negative"
     BOUND = "first tick with age > max_sensor_age_s"
     RESET = "explicit reset, refused while still stale"
 
@@ -101,13 +101,14 @@ class SensorStale(Detector):
 
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
         """True while either age is above the limit."""
-        return not (health.table_age_s <= self.max_age_s and health.base_age_s <= self.max_age_s)
+        limit = self.max_age_s + TIME_EPS_S  # a NaN or negative age is invalid (a clock mix-up) and trips too
+        return not (0.0 <= health.table_age_s <= limit and 0.0 <= health.base_age_s <= limit)
 
     def detail(self, health: TickHealth) -> str:
         """Both ages and the limit."""
         return (
-            f"table age {health.table_age_s * 1e3:.3g} ms, base age {health.base_age_s * 1e3:.3g} ms, "
-            f"expected <= {self.max_age_s * 1e3:.3g} ms"
+            f"table sensor frame age {health.table_age_s * 1e3:.3f} ms, base-mat {health.base_age_s * 1e3:.3f} ms, "
+            f"expected 0 <= age <= {self.max_age_s * 1e3:.3f} ms (judged after polling the bus)"
         )
 
     def present(self, health: TickHealth) -> str:
@@ -172,26 +173,31 @@ class SensorJump(Detector):
 
 
 class SensorStuck(Detector):
-    """A measurement frozen while the table moves.
+    """A measurement frozen to the bit, whether the table moves or not.
 
     Detects: a channel whose fresh samples are bit-identical to the one before for
-    ``stuck_samples`` samples in a row while ``|xdot_0| > stuck_table_speed_m_s``.
+    ``stuck_samples`` samples in a row, at rest too. A healthy transducer is never
+    bit-for-bit constant: its noise through the conditioning moves the last bits on
+    every sample (with noise std at least 0.8 of the quantization step, 50 repeats
+    happen by chance with probability below 1e-9 per hour-long run; docs/SAFETY.md,
+    "Stuck sensors"). A frame that is fresh (good counter and CRC) but frozen is a
+    stuck conditioner or a sender that re-sends its last values. A noise-free
+    (simulated) sensor is indistinguishable from a stuck one, and trips.
     Bound: ``stuck_samples`` fresh samples after the value froze. Action: TRIP.
     Reset: explicit reset (counts cleared).
     """
 
     NAME = "sensor_stuck"
     ACTION = Action.TRIP
-    DETECTS = "value unchanged to the bit for stuck_samples samples while |xdot_0| > stuck_table_speed_m_s"
+    DETECTS = "value unchanged to the bit for stuck_samples fresh samples in a row, at rest too"
     BOUND = "stuck_samples repeated samples"
     RESET = "explicit reset; counts cleared"
 
-    __slots__ = ("samples", "speed_m_s", "_prev", "_primed", "_repeats", "_now", "_channel")
+    __slots__ = ("samples", "_prev", "_primed", "_repeats", "_now", "_channel")
 
     def __init__(self, config: SensorConfig) -> None:
         super().__init__()
         self.samples = config.stuck_samples
-        self.speed_m_s = config.stuck_table_speed_m_s
         self._prev = [0.0] * 4
         self._primed = [False] * 4
         self._repeats = [0] * 4
@@ -199,16 +205,15 @@ class SensorStuck(Detector):
         self._channel = -1
 
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
-        """True once a channel has repeated ``stuck_samples`` times with the table moving."""
+        """True once a channel has repeated ``stuck_samples`` times in a row."""
         read_channels(health, self._now)
-        moving = abs(self._now[1]) > self.speed_m_s
         fired = False
         for k in range(4):
             if not _fresh(health, k):
                 continue
             value = self._now[k]
             same = self._primed[k] and value == self._prev[k]
-            self._repeats[k] = self._repeats[k] + 1 if (same and moving) else 0
+            self._repeats[k] = self._repeats[k] + 1 if same else 0
             self._prev[k] = value
             self._primed[k] = True
             if self._repeats[k] >= self.samples and not fired:
@@ -220,8 +225,9 @@ class SensorStuck(Detector):
         """Channel and count."""
         k = self._channel
         return (
-            f"{CHANNELS[k]} = {self._prev[k]!r} repeated {self._repeats[k]} times while the table moves "
-            f"(|xdot_0| > {self.speed_m_s:g} m/s), expected fewer than {self.samples}"
+            f"{CHANNELS[k]} = {self._prev[k]!r} repeated to the bit {self._repeats[k]} times in a row, "
+            f"expected fewer than {self.samples} (a healthy sensor's noise moves its last bits; a sensor whose "
+            "noise is below its quantization step needs a larger safety.sensors.stuck_samples: docs/SAFETY.md)"
         )
 
     def reset(self) -> None:
@@ -231,7 +237,67 @@ class SensorStuck(Detector):
             self._repeats[k] = 0
 
 
-class SensorDisagree(Detector):
+class _PairRates(Detector):
+    """What ``sensor_disagree`` and ``sensor_sign_flip`` share: per pair (table ``x_0``/``xdot_0``,
+    base mat ``y_b``/``ydot_b``) the finite-difference derivative of the displacement and the
+    measured velocity, both through the same first-order low-pass (``disagree_filter_s``),
+    updated on fresh samples, and a persistence timer per pair on a condition of the two.
+    Subclasses give the condition (:meth:`_bad`).
+    """
+
+    __slots__ = ("_deriv", "_vel", "_timers", "_prev_x", "_since_s", "_primed", "_now", "_pair")
+
+    def __init__(self, filter_s: float, persist_s: float) -> None:
+        super().__init__()
+        self._deriv = (LowPass(filter_s), LowPass(filter_s))
+        self._vel = (LowPass(filter_s), LowPass(filter_s))
+        self._timers = (Persistence(persist_s), Persistence(persist_s))
+        self._prev_x = [0.0, 0.0]
+        self._since_s = [0.0, 0.0]
+        self._primed = [False, False]
+        self._now = [0.0] * 4
+        self._pair = 0
+
+    def _bad(self, pair: int) -> bool:
+        """The condition on the filtered derivative and velocity of ``pair``."""
+        raise NotImplementedError
+
+    def _step_pair(self, t: float, dt: float, pair: int, fresh: bool) -> bool:
+        self._since_s[pair] += dt
+        if fresh:
+            x, v = self._now[2 * pair], self._now[2 * pair + 1]
+            if self._primed[pair] and self._since_s[pair] > 0.0:
+                span = self._since_s[pair]
+                self._deriv[pair].update((x - self._prev_x[pair]) / span, span)
+                self._vel[pair].update(v, span)
+            elif not self._primed[pair]:
+                self._deriv[pair].reset(v, True)
+                self._vel[pair].reset(v, True)
+            self._prev_x[pair] = x
+            self._primed[pair] = True
+            self._since_s[pair] = 0.0
+        return self._timers[pair].update(t, self._bad(pair))
+
+    def _either_pair(self, t: float, dt: float, health: TickHealth) -> bool:
+        """Step both pairs; True (and :attr:`_pair` set) once either condition has persisted."""
+        read_channels(health, self._now)
+        table = self._step_pair(t, dt, 0, health.table_fresh)
+        base = self._step_pair(t, dt, 1, health.base_fresh)
+        if table or base:
+            self._pair = 0 if table else 1
+        return table or base
+
+    def reset(self) -> None:
+        """Clear filters and timers."""
+        for p in range(2):
+            self._primed[p] = False
+            self._since_s[p] = 0.0
+            self._deriv[p].reset()
+            self._vel[p].reset()
+            self._timers[p].reset()
+
+
+class SensorDisagree(_PairRates):
     """Displacement and velocity sensors that disagree.
 
     Detects: for the table (``x_0``, ``xdot_0``) and the base mat (``y_b``,
@@ -249,46 +315,18 @@ class SensorDisagree(Detector):
     BOUND = "disagree_time_s after the filtered difference exceeds the tolerance"
     RESET = "explicit reset; filters cleared"
 
-    __slots__ = ("tolerance_m_s", "_deriv", "_vel", "_timers", "_prev_x", "_since_s", "_primed", "_now", "_pair")
+    __slots__ = ("tolerance_m_s",)
 
     def __init__(self, config: SensorConfig) -> None:
-        super().__init__()
+        super().__init__(config.disagree_filter_s, config.disagree_time_s)
         self.tolerance_m_s = config.disagree_tolerance_m_s
-        tau = config.disagree_filter_s
-        self._deriv = (LowPass(tau), LowPass(tau))
-        self._vel = (LowPass(tau), LowPass(tau))
-        self._timers = (Persistence(config.disagree_time_s), Persistence(config.disagree_time_s))
-        self._prev_x = [0.0, 0.0]
-        self._since_s = [0.0, 0.0]
-        self._primed = [False, False]
-        self._now = [0.0] * 4
-        self._pair = 0
 
-    def _step_pair(self, t: float, dt: float, pair: int, fresh: bool) -> bool:
-        self._since_s[pair] += dt
-        if fresh:
-            x, v = self._now[2 * pair], self._now[2 * pair + 1]
-            if self._primed[pair] and self._since_s[pair] > 0.0:
-                span = self._since_s[pair]
-                self._deriv[pair].update((x - self._prev_x[pair]) / span, span)
-                self._vel[pair].update(v, span)
-            elif not self._primed[pair]:
-                self._deriv[pair].reset(v, True)
-                self._vel[pair].reset(v, True)
-            self._prev_x[pair] = x
-            self._primed[pair] = True
-            self._since_s[pair] = 0.0
-        error = abs(self._deriv[pair].y - self._vel[pair].y)
-        return self._timers[pair].update(t, error > self.tolerance_m_s)
+    def _bad(self, pair: int) -> bool:
+        return abs(self._deriv[pair].y - self._vel[pair].y) > self.tolerance_m_s
 
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
         """True once either pair has disagreed for ``disagree_time_s``."""
-        read_channels(health, self._now)
-        table = self._step_pair(t, dt, 0, health.table_fresh)
-        base = self._step_pair(t, dt, 1, health.base_fresh)
-        if table or base:
-            self._pair = 0 if table else 1
-        return table or base
+        return self._either_pair(t, dt, health)
 
     def detail(self, health: TickHealth) -> str:
         """Which pair, both filtered values, tolerance."""
@@ -298,11 +336,66 @@ class SensorDisagree(Detector):
             f"{self._vel[p].y:.6g} m/s, expected within {self.tolerance_m_s:g} m/s"
         )
 
-    def reset(self) -> None:
-        """Clear filters and timers."""
-        for p in range(2):
-            self._primed[p] = False
-            self._since_s[p] = 0.0
-            self._deriv[p].reset()
-            self._vel[p].reset()
-            self._timers[p].reset()
+
+class SensorSignFlip(_PairRates):
+    """A displacement/velocity pair whose signs disagree: a polarity or wiring fault.
+
+    Detects: for the table (``x_0``, ``xdot_0``) and the base mat (``y_b``,
+    ``ydot_b``), the finite-difference derivative of the displacement and the
+    measured velocity, both through the same first-order low-pass as
+    ``sensor_disagree`` (``disagree_filter_s``), of opposite signs with both above
+    ``sign_flip_floor_m_s`` for ``sign_flip_time_s``. One signal of the pair is
+    negated (a swapped wire, a sensor mounted the other way, a wrong sign in the
+    conditioning): the controller would push the wrong way.
+    Bound: ``sign_flip_time_s`` after both filtered signals exceed the floor with
+    opposite signs (the filter adds its own lag to the onset). Action: TRIP.
+    Reset: explicit reset (filters and timers cleared).
+
+    Why both this and ``sensor_disagree``: ``sensor_disagree`` bounds the magnitude of
+    the difference, which catches scale errors, offsets and drifts of the same sign
+    that this check never sees, but it sees a sign flip only once
+    ``2 |v| > disagree_tolerance_m_s`` (25 mm/s by default), and then calls it a
+    disagreement. This check needs only the signs, above a floor well clear of the
+    noise (2 mm/s, eight times the 0.25 mm/s std of the filtered derivative at rest
+    with the shipped profile's LVDT noise), so it catches a flip at speeds the other
+    never reaches, with the default settings before the other at any speed
+    (docs/SAFETY.md, "Sign flips"), and names the polarity. A pair flipped together
+    (both signals negated) is self-consistent and is caught by neither; a frozen
+    displacement gives a derivative below the floor, and is left to ``sensor_stuck``.
+    """
+
+    NAME = "sensor_sign_flip"
+    ACTION = Action.TRIP
+    DETECTS = "filtered d(displacement)/dt and filtered velocity of opposite signs, both above sign_flip_floor_m_s"
+    BOUND = "sign_flip_time_s after both exceed the floor with opposite signs"
+    RESET = "explicit reset; filters cleared"
+
+    __slots__ = ("floor_m_s", "time_s", "_held_s")
+
+    def __init__(self, config: SensorConfig) -> None:
+        super().__init__(config.disagree_filter_s, config.sign_flip_time_s)
+        self.floor_m_s = config.sign_flip_floor_m_s
+        self.time_s = config.sign_flip_time_s
+        self._held_s = 0.0
+
+    def _bad(self, pair: int) -> bool:
+        d, v, floor = self._deriv[pair].y, self._vel[pair].y, self.floor_m_s
+        return (d > floor and v < -floor) or (d < -floor and v > floor)
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True once either pair has had opposite signs for ``sign_flip_time_s``."""
+        if self._either_pair(t, dt, health):
+            self._held_s = self._timers[self._pair].held_s(t)
+            return True
+        return False
+
+    def detail(self, health: TickHealth) -> str:
+        """Which pair, both filtered values, floor and time."""
+        p = self._pair
+        x, v = CHANNELS[2 * p], CHANNELS[2 * p + 1]
+        return (
+            f"sign flip on {x}/{v}: d{x}/dt filtered = {self._deriv[p].y:.6g} m/s, {v} filtered = "
+            f"{self._vel[p].y:.6g} m/s, opposite signs above {self.floor_m_s:g} m/s for "
+            f"{self._held_s * 1e3:.1f} ms (limit {self.time_s * 1e3:.1f} ms); "
+            "expected the same sign (polarity or wiring fault: the controller would push the wrong way)"
+        )

@@ -9,12 +9,14 @@ Order of evaluation in ARMED, RUNNING and STOPPING (fixed; the first TRIP wins
 and is latched as the reason, later checks are not evaluated on that tick):
 
 1. ``loop_timing``: ``t`` finite and ``dt`` finite and > 0.
-2. Operator: ``estop``, ``operator_trip``, ``operator_stop``.
-3. Sensors: ``sensor_invalid``, ``sensor_stale``, ``sensor_jump``, ``sensor_stuck``, ``sensor_disagree``.
+2. Operator: ``estop``, ``estop_lost`` (the panel's heartbeat), ``operator_trip``, ``operator_stop``.
+3. Sensors: ``sensor_invalid``, ``sensor_stale``, ``sensor_jump``, ``sensor_stuck``, ``sensor_sign_flip``,
+   ``sensor_disagree`` (a sign flip usually trips the disagreement check too, but later; on a
+   tick where both hold, the more specific ``sensor_sign_flip`` is the reason).
 4. CAN: ``bus_gone``, ``bus_off``, ``bus_error_passive``, ``bus_error_frames``, ``e2e_rejects``,
    ``bus_send_failures``, ``foreign_command``.
 5. Actuator: ``drive_fault``, ``hydraulic_pressure``, ``actuator_status_stale``, ``force_tracking``.
-6. ``loop_overruns``.
+6. ``loop_stall``.
 7. ``controller_output``: the raw force must be finite.
 8. Stroke trips: ``stroke_hard``, then ``stroke_predictive``.
 9. Force shaping: ``force_clamp`` -> ``stop_ramp`` (STOPPING; zero target in ARMED) ->
@@ -52,9 +54,16 @@ from harness.safety.events import CHECK_NAMES, Action, EventKind, EventRing, bit
 from harness.safety.health import TickHealth
 from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
 from harness.safety.lifecycle import DRIVE_STATES, Lifecycle, State
-from harness.safety.operator_detectors import EStop, LoopOverruns, OperatorStop, OperatorTrip
+from harness.safety.operator_detectors import EStop, EStopLost, LoopStall, OperatorStop, OperatorTrip
 from harness.safety.prearm import pre_arm_failures
-from harness.safety.sensor_detectors import SensorDisagree, SensorInvalid, SensorJump, SensorStale, SensorStuck
+from harness.safety.sensor_detectors import (
+    SensorDisagree,
+    SensorInvalid,
+    SensorJump,
+    SensorSignFlip,
+    SensorStale,
+    SensorStuck,
+)
 
 _SLOT = {name: k for k, name in enumerate(CHECK_NAMES)}
 _B_CLAMP, _B_RATE, _B_SOFT = bit("force_clamp"), bit("force_rate"), bit("stroke_soft")
@@ -99,6 +108,11 @@ class Supervisor:
     ----------
     config : SafetyConfig
         Must pass :func:`~harness.safety.config.check_config`.
+    period_s : float, optional
+        The loop's nominal tick period (s). The force-rate limit then allows at most
+        ``max_force_rate_N_per_s * period_s`` per tick, even on the tick after a stall
+        whose ``dt`` is longer (docs/SAFETY.md, "Stall budget"). None: ``dt`` (offline
+        simulation, where every step is one period).
 
     Raises
     ------
@@ -118,14 +132,15 @@ class Supervisor:
     __slots__ = (
         "config", "lifecycle", "command", "events", "act_ticks", "soft", "hard", "predictive", "clamp", "rate",
         "tracking", "_estop", "_operator_trip", "detectors", "_bits", "_slots", "_previous_N", "_ramp_gain",
-        "_last_acted",
+        "_last_acted", "period_s",
     )
 
-    def __init__(self, config: SafetyConfig) -> None:
+    def __init__(self, config: SafetyConfig, period_s: float | None = None) -> None:
         problems = check_config(config)
         if problems:
             raise ProfileError("inconsistent safety configuration: " + "; ".join(problems), key_path="safety")
         self.config = config
+        self.period_s = math.inf if period_s is None else float(period_s)
         self.lifecycle = Lifecycle()
         self.command = SupervisedCommand()
         self.events = EventRing(config.run.event_capacity)
@@ -138,13 +153,13 @@ class Supervisor:
         self.tracking = ForceTracking(config.force)
         self._estop, self._operator_trip = EStop(), OperatorTrip()
         self.detectors: tuple[Detector, ...] = (
-            self._estop, self._operator_trip, OperatorStop(),
+            self._estop, EStopLost(config.estop), self._operator_trip, OperatorStop(),
             SensorInvalid(config.sensors), SensorStale(config.sensors), SensorJump(config.sensors),
-            SensorStuck(config.sensors), SensorDisagree(config.sensors),
+            SensorStuck(config.sensors), SensorSignFlip(config.sensors), SensorDisagree(config.sensors),
             BusGone(), BusOff(), BusErrorPassive(config.comms), BusErrorFrames(config.comms),
             E2eRejects(config.comms), BusSendFailures(config.comms), ForeignCommand(),
             DriveFault(), HydraulicPressure(), ActuatorStatusStale(config.actuator), self.tracking,
-            LoopOverruns(config.run),
+            LoopStall(config.run),
         )
         self._bits = tuple(bit(d.NAME) for d in self.detectors)
         self._slots = tuple(index(d.NAME) for d in self.detectors)
@@ -315,7 +330,7 @@ class Supervisor:
             elapsed = t - self.lifecycle.entered_s
             force *= self._ramp_gain * max(0.0, 1.0 - elapsed / self.config.run.stopping_ramp_s)
             self._note_interlock(t, _I_RAMP, _B_RAMP, "stop_ramp")
-        force = self.rate.apply(force, self._previous_N, dt)
+        force = self.rate.apply(force, self._previous_N, min(dt, self.period_s))
         if self.rate.acted:
             self._note_interlock(t, _I_RATE, _B_RATE, "force_rate")
         force = self.soft.apply(force, x_b_m)

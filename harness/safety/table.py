@@ -22,8 +22,15 @@ from harness.safety.comms_detectors import (
 )
 from harness.safety.events import CHECK_NAMES, Action
 from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
-from harness.safety.operator_detectors import EStop, LoopOverruns, OperatorStop, OperatorTrip
-from harness.safety.sensor_detectors import SensorDisagree, SensorInvalid, SensorJump, SensorStale, SensorStuck
+from harness.safety.operator_detectors import EStop, EStopLost, LoopStall, OperatorStop, OperatorTrip
+from harness.safety.sensor_detectors import (
+    SensorDisagree,
+    SensorInvalid,
+    SensorJump,
+    SensorSignFlip,
+    SensorStale,
+    SensorStuck,
+)
 
 
 class SafetyRecord(NamedTuple):
@@ -38,10 +45,10 @@ class SafetyRecord(NamedTuple):
 
 _CLASSES = (
     ForceClamp, ForceRateLimit, StrokeSoftFade, StrokeHardLimit, StrokePredictiveLimit,
-    SensorInvalid, SensorStale, SensorJump, SensorStuck, SensorDisagree,
+    SensorInvalid, SensorStale, SensorJump, SensorStuck, SensorDisagree, SensorSignFlip,
     E2eRejects, BusErrorFrames, BusErrorPassive, BusOff, BusSendFailures, BusGone, ForeignCommand,
     DriveFault, HydraulicPressure, ActuatorStatusStale, ForceTracking,
-    LoopOverruns, EStop, OperatorStop, OperatorTrip,
+    LoopStall, EStop, OperatorStop, OperatorTrip, EStopLost,
 )
 
 _INLINE = (

@@ -8,6 +8,9 @@ would fail the test, so status 2 proves the error was handled and reported.
 
 from __future__ import annotations
 
+import warnings
+from pathlib import Path
+
 import pytest
 
 from harness import exit_codes
@@ -63,3 +66,173 @@ def test_bad_input_file_gives_a_clear_error_and_exit_2(tmp_path, capsys):
     status = main(["simulate", "--record", str(tmp_path / "missing.AT2"), "--quiet"])
     err = capsys.readouterr().err
     assert status == exit_codes.INPUT_ERROR and "missing.AT2" in err
+
+
+# --- every bad option, value, path or key: exit 2, a message naming it and what was expected -------------
+
+RATE_RANGE = "expected a number of Hz in (0, 5000]"
+DURATION_RANGE = "expected a number of s in (0, 600]"
+#: (arguments, what the message must say); ``{tmp}`` is a folder prepared by the ``inputs`` fixture.
+BAD_ARGUMENTS = {
+    # crashed with a traceback (exit 1)
+    "simulate_negative_rate": (["simulate", "--rate", "-500"], ["--rate", "found -500 Hz", RATE_RANGE]),
+    "e2e_window_of_a_billion": (
+        ["dry-run", "--set", "safety.comms.max_e2e_rejects=1000000000"],
+        ["safety.comms.max_e2e_rejects", "found 1e+09", "<= 10000"],
+    ),
+    "report_binary_signals": (["report", "{tmp}/binary_signals"], ["signals.csv", "not UTF-8 text", "byte 0x"]),
+    # silently accepted
+    "simulate_zero_rate": (["simulate", "--rate", "0"], ["--rate", "found 0 Hz", RATE_RANGE]),
+    "simulate_rate_20_kHz": (["simulate", "--rate", "20000"], ["--rate", "found 20000 Hz", RATE_RANGE]),
+    "report_half_truncated_signals": (
+        ["report", "{tmp}/truncated_signals"], ["signals.csv", "holds 20 rows (lines 2 to 21)", "wrote 40", "rows 21 to 40"],
+    ),
+    # unclear messages
+    "dry_run_negative_rate": (["dry-run", "--rate", "-500"], ["--rate", "found -500 Hz", RATE_RANGE]),
+    "infinite_duration": (["simulate", "--duration", "inf"], ["--duration", "found inf s", DURATION_RANGE]),
+    "record_without_unit": (["simulate", "--record", "{tmp}/no_unit.csv"], ["no_unit.csv", "record.accel_unit", "header"]),
+    "acceleration_1e308": (["simulate", "--record", "{tmp}/huge.csv"], ["huge.csv:7", "1e+308 g", "exceeds 10 g"]),
+    "binary_dbc": (["dry-run", "--set", "can.dbc_path={tmp}/binary.dbc"], ["binary.dbc", "not a text file", "expected a DBC"]),
+    # a dozen more of the same kind
+    "nan_rate": (["simulate", "--rate", "nan"], ["--rate", "found nan Hz", RATE_RANGE]),
+    "rig_zero_rate": (["rig", "--rate", "0"], ["--rate", "found 0 Hz", RATE_RANGE]),
+    "run_negative_rate": (["run", "--rate", "-1"], ["--rate", "found -1 Hz", RATE_RANGE]),
+    "text_rate": (["simulate", "--rate", "fast"], ["--rate", "found 'fast'", RATE_RANGE]),
+    "empty_duration": (["simulate", "--duration", ""], ["--duration", "found an empty value", DURATION_RANGE]),
+    "zero_duration": (["records", "synthetic", "--duration", "0"], ["--duration", "found 0 s", DURATION_RANGE]),
+    "negative_pga": (["simulate", "--pga", "-0.3"], ["--pga", "found -0.3 g", "expected a number of g in (0, 10]"]),
+    "nan_pga": (["records", "synthetic", "--pga", "nan"], ["--pga", "found nan g", "(0, 10]"]),
+    "zero_time_scale": (["simulate", "--time-scale", "0"], ["--time-scale", "found 0", "expected a number in [0.1, 10]"]),
+    "huge_time_scale": (["dry-run", "--time-scale", "1e9"], ["--time-scale", "found 1e+09", "[0.1, 10]"]),
+    "negative_delay": (["simulate", "--delay", "-0.001"], ["--delay", "found -0.001 s", "expected a number of s in [0, 1]"]),
+    "zero_stiffness_scale": (["simulate", "--design-stiffness-scale", "0"], ["--design-stiffness-scale", "found 0", "[0.1, 10]"]),
+    "negative_seed": (["rig", "--seed", "-1"], ["--seed", "found -1", "expected a whole number in [0, 4.29497e+09]"]),
+    "fractional_seed": (["rig", "--seed", "1.5"], ["--seed", "found '1.5'", "whole number"]),
+    "set_without_equals": (["dry-run", "--set", "safety.stroke.hard_limit_m"], ["--set", "expected KEY.PATH=VALUE"]),
+    "set_empty": (["dry-run", "--set", ""], ["--set", "expected KEY.PATH=VALUE"]),
+    "set_unknown_key": (["dry-run", "--set", "safety.strokes.hard_limit_m=0.05"], ["safety.strokes", "unknown key 'strokes'"]),
+    "set_bad_yaml": (["dry-run", "--set", "safety.stroke.hard_limit_m=[0.05"], ["--set", "not valid YAML"]),
+    "set_twice": (
+        ["dry-run", "--set", "safety.stroke.hard_limit_m=0.05", "--set", "safety.stroke.hard_limit_m=0.02"],
+        ["--set", "sets safety.stroke.hard_limit_m again", "expected each key once"],
+    ),
+    "set_duplicate_inside_value": (
+        ["dry-run", "--set", "safety.stroke={hard_limit_m: 0.05, hard_limit_m: 0.02}"], ["--set", "duplicate key 'hard_limit_m'"],
+    ),
+    "set_rate_above_bound": (["dry-run", "--set", "control.rate_hz=20000"], ["control.rate_hz", "found 20000", "<= 5000 Hz"]),
+    "unknown_variant": (["simulate", "--variant", "no_such_variant"], ["unknown variant 'no_such_variant'"]),
+    "missing_profile": (["simulate", "{tmp}/missing.yaml"], ["missing.yaml", "not found", "expected an existing YAML file"]),
+    "profile_is_a_directory": (["dry-run", "{tmp}/folder"], ["folder", "is a directory", "expected an existing YAML file"]),
+    "record_is_a_directory": (["simulate", "--record", "{tmp}/folder"], ["folder", "is a directory, expected a record file"]),
+    "missing_record": (["records", "{tmp}/missing.csv"], ["missing.csv", "does not exist"]),
+    "too_long_record": (
+        ["dry-run", "--record", "{tmp}/long.csv", "--time-scale", "1", "--set", "record.duration_s=null"],
+        ["runs 700 s", "at most 600 s", "--duration"],
+    ),
+    "json_is_a_directory": (["simulate", "--json", "{tmp}/folder"], ["--json", "is a directory, expected a file name"]),
+    "json_in_missing_folder": (["simulate", "--json", "{tmp}/nowhere/out.json"], ["--json", "nowhere", "does not exist"]),
+    "out_is_a_file": (["simulate", "--out", "{tmp}/file.txt"], ["--out", "is a file, expected a directory"]),
+    "log_dir_is_a_file": (["dry-run", "--log-dir", "{tmp}/file.txt"], ["--log-dir", "is a file, expected a directory"]),
+    "plot_is_a_directory": (["records", "synthetic", "--plot", "{tmp}/folder"], ["--plot", "is a directory"]),
+    "report_missing_folder": (["report", "{tmp}/missing_run"], ["missing_run", "no such folder, expected a run folder"]),
+    "report_of_a_file": (["report", "{tmp}/file.txt"], ["file.txt", "is a file, expected a run folder"]),
+    "report_binary_events": (["report", "{tmp}/binary_events"], ["events.jsonl", "not UTF-8 text"]),
+    "dbc_is_a_directory": (["dry-run", "--set", "can.dbc_path={tmp}/folder"], ["folder", "is a directory, expected a DBC"]),
+    "missing_dbc": (["dry-run", "--set", "can.dbc_path={tmp}/missing.dbc"], ["missing.dbc", "not found"]),
+    "empty_record_name": (["simulate", "--record", ""], ["--record", "found an empty value"]),
+    "empty_controller": (["dry-run", "--controller", " "], ["--controller", "found an empty value"]),
+    "synthetic_seed_too_large": (["simulate", "--record", "synthetic:99999999999999999999"], ["expected a seed in [0, 4294967295]"]),
+    "zero_parent_pid": (["rig", "--parent-pid", "0"], ["--parent-pid", "found 0", "expected a whole number in [1, 4.1943e+06]"]),
+    "weaker_safety_without_the_flag": (
+        ["dry-run", "--set", "safety.comms.error_frame_action=indicate"],
+        ["safety.comms.error_frame_action safe_stop -> indicate", "--allow-weaker-safety"],
+    ),
+    "max_force_beyond_the_dbc_with_the_flag": (
+        ["dry-run", "--set", "safety.force.max_force_N=40000", "--allow-weaker-safety"],
+        ["safety.force.max_force_N", "found 40000 N", "expected at most 30000 N", "ACTUATOR_CMD"],
+    ),
+}
+
+
+def _run_folder(parent: Path, name: str, rows: int = 40) -> Path:
+    from harness.record import RunFolder, canonical_columns
+
+    columns = canonical_columns(3)
+    run = RunFolder.create(parent, "p", "dry-run", {}, columns)
+    run.start()
+    for i in range(rows):
+        run.record_row([i * 0.002] + [0.0] * (len(columns) - 1))
+    run.finish("completed")
+    return run.path.rename(parent / name)
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory) -> Path:
+    tmp = tmp_path_factory.mktemp("bad_inputs")
+    (tmp / "folder").mkdir()
+    (tmp / "file.txt").write_text("not a folder\n")
+    (tmp / "binary.dbc").write_bytes(b"\x7fELF\x02\x01\x01\x00\x1b[31m" + bytes(range(256)) * 4)
+    (tmp / "no_unit.csv").write_text("t,acc\n" + "".join(f"{i * 0.01:.2f},0.01\n" for i in range(50)))
+    (tmp / "huge.csv").write_text(GOOD_HEADER + "".join(f"{i * 0.01:.2f},{'1e308' if i == 5 else '0.01'}\n" for i in range(50)))
+    (tmp / "long.csv").write_text(GOOD_HEADER + "".join(f"{i * 0.1:.1f},{0.01 if i % 2 else -0.01}\n" for i in range(7001)))
+    _run_folder(tmp, "binary_signals")
+    (tmp / "binary_signals" / "signals.csv").write_bytes(bytes(range(128, 256)) * 20)
+    _run_folder(tmp, "binary_events")
+    (tmp / "binary_events" / "events.jsonl").write_bytes(b"\xff\xfe" + bytes(range(128, 256)) * 4)
+    signals = _run_folder(tmp, "truncated_signals") / "signals.csv"
+    lines = signals.read_text().splitlines(keepends=True)
+    signals.write_text("".join(lines[:21]) + lines[21][:10])  # header, 20 rows and a torn one: half the file
+    return tmp
+
+
+@pytest.mark.parametrize("case", sorted(BAD_ARGUMENTS))
+def test_bad_argument_gives_exit_2_and_names_what_was_expected(inputs, capsys, case):
+    argv, expected = BAD_ARGUMENTS[case]
+    argv = [arg.replace("{tmp}", str(inputs)) for arg in argv]
+    if argv[0] in ("simulate", "dry-run", "rig", "run") and "--duration" not in argv and case != "too_long_record":
+        argv += ["--duration", "1"]
+    if argv[0] in ("dry-run", "run") and "--log-dir" not in argv:
+        argv += ["--log-dir", str(inputs / "logs")]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # a numpy overflow warning would leak to the terminal
+        status = main(argv)
+    out, err = capsys.readouterr()
+    assert status == exit_codes.INPUT_ERROR, f"{argv}: status {status}\n{out}\n{err}"
+    message = " ".join(err.split())  # rich wraps long messages
+    for text in expected:
+        assert text in message, f"{text!r} not in {message!r}"
+    assert "Traceback" not in out + err
+    assert all(ch.isprintable() or ch in "\n\t" for ch in err), "raw bytes echoed to the terminal"
+    assert not (inputs / "logs").exists() or not any((inputs / "logs").iterdir()), "a run folder was made"
+
+
+def test_the_old_misleading_messages_are_gone(inputs, capsys):
+    main(["dry-run", "--rate", "-500", "--duration", "1"])
+    assert "physics sub-step" not in capsys.readouterr().err
+    main(["simulate", "--record", str(inputs / "no_unit.csv"), "--duration", "1"])
+    assert "--accel-unit" not in capsys.readouterr().err  # no such flag exists
+    main(["simulate", "--record", str(inputs / "huge.csv"), "--duration", "1"])
+    assert "inf g" not in capsys.readouterr().err
+
+
+def test_every_numeric_option_is_range_checked():
+    """No option of any command takes a bare float or int: each goes through a range with its unit."""
+    import argparse
+
+    from harness.cli import build_parser
+
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+    for name, command in commands.items():
+        for action in command._actions:
+            assert action.type not in (float, int), f"harness {name} {action.option_strings}: unchecked number"
+
+
+def test_the_cli_bounds_match_the_profile_schema():
+    from dataclasses import fields
+
+    from harness import input_limits
+    from harness.loop.config import LoopConfig
+
+    rate = next(f for f in fields(LoopConfig) if f.name == "rate_hz")
+    assert rate.metadata["le"] == input_limits.MAX_RATE_HZ

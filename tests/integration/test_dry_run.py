@@ -88,8 +88,21 @@ def test_stroke_trip_zeroes_force_and_disables_the_drive_in_the_same_tick(tmp_pa
     assert any(e["kind"] == "fault" and e["name"] == metadata["trip_reason"] for e in run.events)
 
 
-def _signal_later(delays_s, signum=signal.SIGINT):
+def _signal_later(delays_s, signum=signal.SIGINT, log_dir: Path | None = None):
+    """Send ``signum`` to this process after each delay; the first delay counts from RUNNING when ``log_dir`` is given.
+
+    The rig starts in its own process first, so the loop's RUNNING phase begins a
+    machine-dependent time after the command: wait for it in the run's events.
+    """
+    def running() -> bool:
+        return any('"RUNNING"' in events.read_text() for events in log_dir.glob("*/events.jsonl"))
+
     def fire():
+        if log_dir is not None:
+            for _ in range(1200):
+                if running():
+                    break
+                threading.Event().wait(0.05)
         for delay in delays_s:
             threading.Event().wait(delay)
             os.kill(os.getpid(), signum)
@@ -100,7 +113,7 @@ def _signal_later(delays_s, signum=signal.SIGINT):
 
 
 def test_ctrl_c_stops_safely(tmp_path, capsys):
-    _signal_later([2.5])
+    _signal_later([0.5], log_dir=tmp_path)
     status, folder = _dry_run(tmp_path, "--duration", "20")
     capsys.readouterr()
     assert status == exit_codes.STOPPED
@@ -116,7 +129,7 @@ def test_ctrl_c_stops_safely(tmp_path, capsys):
 
 
 def test_second_ctrl_c_trips(tmp_path, capsys):
-    _signal_later([2.5, 0.05])
+    _signal_later([0.5, 0.05], log_dir=tmp_path)
     status, folder = _dry_run(tmp_path, "--duration", "20")
     capsys.readouterr()
     assert status == exit_codes.TRIPPED
@@ -124,7 +137,7 @@ def test_second_ctrl_c_trips(tmp_path, capsys):
 
 
 def test_sigterm_trips(tmp_path, capsys):
-    _signal_later([2.5], signal.SIGTERM)
+    _signal_later([0.5], signal.SIGTERM, log_dir=tmp_path)
     status, folder = _dry_run(tmp_path, "--duration", "20")
     capsys.readouterr()
     assert status == exit_codes.TRIPPED

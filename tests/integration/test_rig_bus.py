@@ -125,7 +125,8 @@ def test_lockstep_publishes_in_contract_order_one_step_per_command(bench):
     b = bench()
     b.start()
     opening = [m.arbitration_id for m in b.frames()]
-    assert opening == [0x30, 0x31, 0x200, 0x201, 0x40, 0x301], "entering lockstep publishes the set, RIG_STATUS last"
+    # the E-stop panel's heartbeat (0x10, source 3) rides with the set every 25 steps, step 0 included
+    assert opening == [0x30, 0x31, 0x200, 0x201, 0x40, 0x10, 0x301], "entering lockstep publishes the set, RIG_STATUS last"
     assert b.value("RIG_STATUS", "step_index") == 0 and b.value("RIG_STATUS", "lockstep") == 1
     b.writer.heartbeat(1, b.now)
     b.service(PERIOD)
@@ -241,11 +242,13 @@ def test_watchdog_trips_when_commands_stop(bench):
 
 
 def test_lockstep_watchdog_runs_on_the_wall_clock(bench):
-    b = bench(quiet_config(drive=DriveConfig(watchdog_timeout_s=0.05)))
+    b = bench(quiet_config(drive=DriveConfig(watchdog_timeout_s=0.05, lockstep_watchdog_timeout_s=1.0)))
     b.start()
     b.step(100.0)
     assert b.rig.state.drive_state == D.ENABLED
-    b.service(0.2)  # no frames: the lockstep loop's poll timeout calls service with the time
+    b.service(0.2)  # a slow host: 0.2 s without a step is far past the real-time 50 ms, not past the lockstep bound
+    assert b.rig.state.drive_state == D.ENABLED
+    b.service(1.3)  # no frames: the lockstep loop's poll timeout calls service with the time
     assert b.rig.state.drive_state == D.FAULT
     assert b.reader.drive_state == D.FAULT, "announced between steps"
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import math
+import time
 import uuid
 from collections import deque
 from collections.abc import Iterable
@@ -87,10 +88,12 @@ def test_reader_keeps_latest_sample_with_receive_time_and_age() -> None:
 
 
 def test_reader_can_take_receive_time_from_the_frame() -> None:
-    bus = FakeBus([frame("BASE_SENSORS", [0.0, 0.0, 0.0], timestamp=123.5)])
+    # the frame's wall-clock stamp, 0.25 s before the poll, moved onto the loop's clock
+    bus = FakeBus([frame("BASE_SENSORS", [0.0, 0.0, 0.0], timestamp=time.time() - 0.25)])
     reader = harness_reader(bus, timestamp_source="message")
     reader.poll(now=999.0)
-    assert reader.sample("BASE_SENSORS").rx_time == 123.5
+    assert reader.sample("BASE_SENSORS").rx_time == pytest.approx(999.0 - 0.25, abs=0.05)
+    assert reader.sample("BASE_SENSORS").age(999.0) == pytest.approx(0.25, abs=0.05)
 
 
 def test_rejected_frames_do_not_touch_the_sample_and_are_counted() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
 from harness.safety.actuator_detectors import ActuatorStatusStale, DriveFault, ForceTracking, HydraulicPressure
@@ -21,9 +22,20 @@ from harness.safety.config import ActuatorConfig, CommsConfig, ForceConfig, RunC
 from harness.safety.detector_base import Persistence, WindowCounter
 from harness.safety.events import CHECK_NAMES, Action
 from harness.safety.health import TickHealth
-from harness.safety.operator_detectors import EStop, LoopOverruns, OperatorStop, OperatorTrip
-from harness.safety.sensor_detectors import SensorDisagree, SensorInvalid, SensorJump, SensorStale, SensorStuck
+from harness.safety.operator_detectors import EStop, LoopStall, OperatorStop, OperatorTrip
+from harness.profile import load_profile
+from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
+from harness.safety.sensor_detectors import (
+    CHANNELS,
+    SensorDisagree,
+    SensorInvalid,
+    SensorJump,
+    SensorSignFlip,
+    SensorStale,
+    SensorStuck,
+)
 from harness.safety.table import SAFETY_TABLE
+from tests.conftest import PROFILES
 
 DT = 0.001
 SENSORS = SensorConfig()
@@ -62,7 +74,7 @@ def test_sensor_stale_at_and_around_max_age(which: str) -> None:
     det = SensorStale(SENSORS)
     limit = SENSORS.max_sensor_age_s
     assert not det.update(0.0, DT, _health(**{which: limit}))
-    assert det.update(0.0, DT, _health(**{which: limit * (1 + 1e-9)}))
+    assert det.update(0.0, DT, _health(**{which: limit + 1e-6}))  # beyond the 1 ns float tolerance
     assert det.update(0.0, DT, _health(**{which: math.nan}))
     assert det.present(_health(**{which: 1.0})) and not det.present(_health())
 
@@ -103,37 +115,113 @@ def test_sensor_jump_ignores_ticks_without_a_fresh_sample_and_reset_clears_histo
 
 # ------------------------------------------------------------------ sensor_stuck
 
+#: The shipped profile's rig: its sensors' noise and quantization, and its loop rate.
+RIG = load_profile(PROFILES / "nceer_4dof.yaml").rig
+RIG_DT = 0.002  # 500 Hz: one sensor frame per tick
+#: Samples of a long run for the false-alarm budget: one hour at 500 Hz (a record is 30 s).
+RUN_SAMPLES = 3600 * 500
 
-@pytest.mark.parametrize("frozen", ["table_displacement_m", "base_displacement_m", "base_velocity_m_s"])
-def test_sensor_stuck_fires_on_the_nth_repeat_while_the_table_moves(frozen: str) -> None:
-    config = dataclasses.replace(SENSORS, stuck_samples=10)
-    det = SensorStuck(config)
-    health = _health(table_velocity_m_s=0.1)
+
+def _noisy_channels(seed: int, truth: float = 0.0):
+    """x_0, xdot_0, y_b, ydot_b at rest (or at ``truth``) as the rig's own SensorModel reads them."""
+    model = SensorModel(RIG.sensors, RIG.physics_substep_s, 0.1, np.random.default_rng(seed))
+    model.reset(np.full(len(SIGNALS), truth))
+    model.set_delays(0.0, None)
+    table, base = [0.0] * 3, [0.0] * 3
+
+    def read(health: TickHealth) -> None:
+        model.read(MESSAGE_COLUMNS[0], table)
+        model.read(MESSAGE_COLUMNS[1], base)
+        health.meas.table_displacement_m, health.meas.table_velocity_m_s = table[0], table[1]
+        health.meas.base_displacement_m, health.meas.base_velocity_m_s = base[0], base[1]
+
+    return read
+
+
+def _largest_cell_probability(noise_std: float, step: float) -> float:
+    """Largest probability of one cell of a quantized normal: the truth at a cell's centre."""
+    return math.erf(step / 2 / noise_std / math.sqrt(2))
+
+
+@pytest.mark.parametrize("table_velocity_m_s", [0.0, 0.1])  # at rest, and with the table moving
+@pytest.mark.parametrize("frozen", CHANNEL_ATTRS)
+def test_sensor_stuck_fires_on_the_nth_repeat_at_rest_and_not_before(frozen: str, table_velocity_m_s: float) -> None:
+    n = SENSORS.stuck_samples
+    det = SensorStuck(SENSORS)
+    read = _noisy_channels(seed=5)
+    health = _health()
     fired = None
-    for k in range(30):
-        # every channel changes each sample except the frozen one (xdot_0 varies around 0.1 m/s)
-        for name in CHANNEL_ATTRS:
-            if name != frozen:
-                setattr(health.meas, name, (0.1 if name == "table_velocity_m_s" else 0.0) + 1e-6 * (k % 7 + 1) * (1 + k))
-        if det.update(k * DT, DT, health):
+    for k in range(3 * n):
+        read(health)  # every channel noisy, the table still (or moving) ...
+        if frozen != "table_velocity_m_s":
+            health.meas.table_velocity_m_s += table_velocity_m_s
+        setattr(health.meas, frozen, 0.0123)  # ... except the frozen one, bit-identical every sample
+        if det.update(k * RIG_DT, RIG_DT, health):
             fired = k
             break
-    # sample 0 primes, samples 1..10 are the 10 repeats
-    assert fired == 10
-    assert "repeated 10 times" in det.detail(health)
+    # sample 0 primes, samples 1..n are the n repeats: quiet on the (n-1)-th, fires on the n-th
+    assert fired == n
+    detail = det.detail(health)
+    assert f"{CHANNELS[CHANNEL_ATTRS.index(frozen)]} = 0.0123 repeated to the bit {n} times" in detail
+    assert det.ACTION is Action.TRIP and det.present(health) == ""
 
 
-def test_sensor_stuck_does_not_fire_below_n_repeats_or_when_the_table_is_still() -> None:
+def test_sensor_stuck_restarts_its_count_when_the_value_moves_and_on_reset() -> None:
     config = dataclasses.replace(SENSORS, stuck_samples=10)
     det = SensorStuck(config)
-    health = _health(table_velocity_m_s=0.1)
-    for k in range(10):  # 9 repeats of every channel but xdot_0
-        health.meas.table_velocity_m_s = 0.1 + 1e-6 * k
+    health = _health()  # every channel 0.0: noise-free, so every sample repeats
+    for k in range(10):  # prime + 9 repeats
         assert not det.update(k * DT, DT, health)
-    still = SensorStuck(config)
-    quiet = _health(table_velocity_m_s=config.stuck_table_speed_m_s)  # at the threshold: not moving
-    for k in range(100):
-        assert not still.update(k * DT, DT, quiet)
+    health.meas.base_velocity_m_s = 5e-5  # one channel moves by one step: its count restarts ...
+    assert det.update(10 * DT, DT, health)  # ... but the others reach 10 repeats
+    det.reset()
+    for k in range(10):
+        assert not det.update(k * DT, DT, health)
+    assert det.update(10 * DT, DT, health)
+
+
+def test_sensor_stuck_quiet_on_the_profiles_noise_at_rest_over_10000_samples() -> None:
+    det = SensorStuck(SENSORS)
+    for seed in (0, 1):
+        read = _noisy_channels(seed)
+        health = _health()
+        longest, runs, previous = [0] * 4, [0] * 4, [math.nan] * 4
+        for k in range(10_000):
+            read(health)
+            assert not det.update(k * RIG_DT, RIG_DT, health), det.detail(health)
+            for c, name in enumerate(CHANNEL_ATTRS):
+                value = getattr(health.meas, name)
+                runs[c] = runs[c] + 1 if value == previous[c] else 0
+                previous[c] = value
+                longest[c] = max(longest[c], runs[c])
+        # a healthy channel does repeat now and then, but nowhere near stuck_samples in a row
+        assert 0 < max(longest) < SENSORS.stuck_samples // 2, longest
+        det.reset()
+
+
+def test_sensor_stuck_false_alarm_probability_of_the_profiles_noise() -> None:
+    """docs/SAFETY.md, "Stuck sensors": P(N repeats) <= p_max**N per start, union over channels and samples."""
+    n = SENSORS.stuck_samples
+    bound = 0.0
+    for group in (RIG.sensors.displacement, RIG.sensors.velocity):
+        noise_std, _, step, _ = group.as_tuple()
+        p_max = _largest_cell_probability(noise_std, step)
+        bound += 2 * RUN_SAMPLES * p_max**n  # two channels of each kind
+    assert bound < 1e-9
+    # the arithmetic SAFETY.md shows: LVDT 5 um noise on 5 um steps, velocity 0.2 mm/s on 0.05 mm/s steps
+    assert _largest_cell_probability(5e-6, 5e-6) == pytest.approx(0.3829, abs=1e-4)
+    assert _largest_cell_probability(2e-4, 5e-5) == pytest.approx(0.0995, abs=1e-4)
+    assert 0.3829**n < 1.5e-21
+    # and the repeat rate a SensorModel shows agrees with the quantized normal (sum of p_i**2 <= p_max)
+    read = _noisy_channels(seed=2)
+    health = _health()
+    repeats, previous = 0, math.nan
+    for _ in range(20_000):
+        read(health)
+        repeats += health.meas.table_displacement_m == previous
+        previous = health.meas.table_displacement_m
+    cells = [math.erf((j + 0.5) / math.sqrt(2)) / 2 - math.erf((j - 0.5) / math.sqrt(2)) / 2 for j in range(-8, 9)]
+    assert repeats / 20_000 == pytest.approx(sum(p * p for p in cells), abs=0.02)
 
 
 def test_sensor_stuck_counts_fresh_samples_only() -> None:
@@ -179,6 +267,124 @@ def test_sensor_disagree_fires_within_its_bound() -> None:
     cross_s = SENSORS.disagree_filter_s * math.log(2)
     assert fired * DT >= SENSORS.disagree_time_s
     assert fired * DT <= cross_s + SENSORS.disagree_time_s + 5 * DT
+
+
+# ------------------------------------------------------------------ sensor_sign_flip
+
+#: Filters that pass their input through (tau << DT), so the sign-flip condition is the raw one.
+UNFILTERED = dataclasses.replace(SENSORS, disagree_filter_s=1e-9)
+PAIRS = {"table": ("table_displacement_m", "table_velocity_m_s", "x_0/xdot_0"),
+         "base": ("base_displacement_m", "base_velocity_m_s", "y_b/ydot_b")}
+
+
+def _ramp_run(config: SensorConfig, pair: str, speed_m_s: float, flipped_ticks, ticks: int) -> int | None:
+    """One pair moving at ``speed_m_s``; its velocity sent negated on ``flipped_ticks``; the other pair at rest."""
+    det = SensorSignFlip(config)
+    disp, vel, _ = PAIRS[pair]
+    health = _health()
+    for k in range(ticks):
+        setattr(health.meas, disp, speed_m_s * k * DT)
+        setattr(health.meas, vel, -speed_m_s if k in flipped_ticks else speed_m_s)
+        if det.update(k * DT, DT, health):
+            return k
+    return None
+
+
+@pytest.mark.parametrize("pair", sorted(PAIRS))
+def test_sensor_sign_flip_at_and_around_its_time_and_floor(pair: str) -> None:
+    n = round(SENSORS.sign_flip_time_s / DT)  # ticks the condition must hold
+    speed = SENSORS.sign_flip_floor_m_s * 1.01
+    # the flip starts at tick 100: it fires on the first tick with t - onset >= sign_flip_time_s ...
+    assert _ramp_run(UNFILTERED, pair, speed, range(100, 10_000), 1000) == 100 + n
+    # ... and not when the signs agree again one tick earlier
+    assert _ramp_run(UNFILTERED, pair, speed, range(100, 100 + n), 1000) is None
+    # opposite signs below the floor are not judged
+    assert _ramp_run(UNFILTERED, pair, SENSORS.sign_flip_floor_m_s * 0.99, range(100, 10_000), 1000) is None
+    det = SensorSignFlip(UNFILTERED)
+    assert det.ACTION is Action.TRIP
+
+
+def _sine_run(flip: str, amplitude_m_s: float, flip_at_s: float, ticks: int, config: SensorConfig = SENSORS):
+    """Base mat moving as a sine; from ``flip_at_s`` one of its signals is negated. Fire tick of each check."""
+    flip_det, disagree = SensorSignFlip(config), SensorDisagree(config)
+    fired: dict[str, int] = {}
+    health = _health()
+    w = 2 * math.pi
+    for k in range(ticks):
+        t = k * DT
+        v = amplitude_m_s * math.cos(w * t)
+        x = amplitude_m_s / w * math.sin(w * t)
+        if flip != "none" and t >= flip_at_s:
+            x, v = (-x, v) if flip == "displacement" else (x, -v)
+        health.meas.base_displacement_m, health.meas.base_velocity_m_s = x, v
+        health.meas.table_displacement_m, health.meas.table_velocity_m_s = 0.01 * t, 0.01
+        for det in (flip_det, disagree):
+            if det.NAME not in fired and det.update(t, DT, health):
+                fired[det.NAME] = k
+        if len(fired) == 2:
+            break
+    return fired, flip_det
+
+
+@pytest.mark.parametrize("amplitude_m_s", [0.01, 0.03, 0.1, 0.5])
+def test_sensor_sign_flip_fires_within_its_bound_and_before_sensor_disagree(amplitude_m_s: float) -> None:
+    # the flip comes at a peak of the speed (t = 1 s: cos = 1); the filtered velocity, primed at +v,
+    # has to cross -floor: tau * ln(2 v / (v - floor)), then the condition must hold sign_flip_time_s
+    fired, det = _sine_run("velocity", amplitude_m_s, 1.0, 3000)
+    tau, floor = SENSORS.disagree_filter_s, SENSORS.sign_flip_floor_m_s
+    onset_s = tau * math.log(2 * amplitude_m_s / (amplitude_m_s - floor))
+    latency_s = fired["sensor_sign_flip"] * DT - 1.0
+    assert SENSORS.sign_flip_time_s <= latency_s <= onset_s + SENSORS.sign_flip_time_s + 3 * DT
+    assert "sign flip on y_b/ydot_b" in det.detail(_health())
+    # sensor_disagree sees the same flip only once 2|v| > its tolerance, and always later: the sign flip is named
+    if "sensor_disagree" in fired:
+        assert fired["sensor_sign_flip"] < fired["sensor_disagree"]
+    if amplitude_m_s >= 2 * SENSORS.disagree_tolerance_m_s:
+        assert "sensor_disagree" in fired  # it does catch a fast flip, as a disagreement
+    if 2 * amplitude_m_s <= SENSORS.disagree_tolerance_m_s:
+        assert "sensor_disagree" not in fired  # a slow flip it never sees
+
+
+def test_sensor_sign_flip_of_the_displacement_trips_too() -> None:
+    fired, det = _sine_run("displacement", 0.1, 1.0, 3000)  # as the displacement crosses zero: no jump
+    tau, floor = SENSORS.disagree_filter_s, SENSORS.sign_flip_floor_m_s
+    onset_s = tau * math.log(2 * 0.1 / (0.1 - floor))
+    latency_s = fired["sensor_sign_flip"] * DT - 1.0
+    assert SENSORS.sign_flip_time_s <= latency_s <= onset_s + SENSORS.sign_flip_time_s + 3 * DT
+    assert "sign flip on y_b/ydot_b" in det.detail(_health())
+
+
+def test_sensor_sign_flip_quiet_for_consistent_signals_and_for_noise_around_zero() -> None:
+    for amplitude in (0.001, 0.01, 0.2, 1.0):  # consistent signs through every reversal, at any speed
+        fired, _ = _sine_run("none", amplitude, 0.0, 4000)
+        assert "sensor_sign_flip" not in fired, amplitude
+    det = SensorSignFlip(SENSORS)
+    for seed in (0, 1):  # the profile's sensor noise at rest, from the rig's own SensorModel
+        read = _noisy_channels(seed)
+        health = _health()
+        for k in range(10_000):
+            read(health)
+            assert not det.update(k * RIG_DT, RIG_DT, health), det.detail(health)
+        det.reset()
+
+
+def test_sensor_sign_flip_restarts_when_the_signs_agree_and_on_reset() -> None:
+    n = round(SENSORS.sign_flip_time_s / DT)
+    speed = SENSORS.sign_flip_floor_m_s * 2
+    # two flipped stretches of n - 1 ticks each, separated by one consistent tick: never n in a row
+    flipped = [k for k in range(100, 100 + 2 * n) if k != 100 + n - 1]
+    assert _ramp_run(UNFILTERED, "base", speed, flipped, 1000) is None
+    det = SensorSignFlip(UNFILTERED)
+    health = _health(base_velocity_m_s=-speed)
+    for k in range(n):  # primes, then n - 1 ticks of opposite signs
+        health.meas.base_displacement_m = speed * k * DT
+        assert not det.update(k * DT, DT, health)
+    det.reset()  # forgets filters and onset: primes again, then takes a full sign_flip_time_s
+    for k in range(n, 2 * n + 1):
+        health.meas.base_displacement_m = speed * k * DT
+        assert not det.update(k * DT, DT, health)
+    health.meas.base_displacement_m = speed * (2 * n + 1) * DT
+    assert det.update((2 * n + 1) * DT, DT, health)
 
 
 # ------------------------------------------------------------------ rate windows
@@ -310,11 +516,13 @@ def test_persistence_restarts_when_the_condition_clears() -> None:
 # ------------------------------------------------------------------ loop
 
 
-def test_loop_overruns_at_and_around_n() -> None:
-    det = LoopOverruns(RunConfig(max_consecutive_overruns=3))
-    assert not det.update(0.0, DT, TickHealth(consecutive_overruns=2))
-    assert det.update(0.0, DT, TickHealth(consecutive_overruns=3))
-    assert "3 consecutive" in det.detail(TickHealth(consecutive_overruns=3))
+def test_loop_stall_at_and_around_the_budget() -> None:
+    det = LoopStall(RunConfig(max_stall_s=0.02))
+    assert not det.update(0.0, DT, TickHealth(stall_s=0.02))
+    assert det.update(0.0, DT, TickHealth(stall_s=0.0201))
+    detail = det.detail(TickHealth(stall_s=0.045, missed_periods=22))
+    assert "45.0 ms" in detail and "22 missed periods" in detail and "20.0 ms" in detail
+    assert "host" in detail and "--rate" in detail and "--lockstep" in detail  # says it is host timing and what to do
 
 
 # ------------------------------------------------------------------ the table
@@ -328,9 +536,9 @@ def test_safety_table_has_one_complete_record_per_check() -> None:
 
 
 @pytest.mark.parametrize("cls", [
-    SensorInvalid, SensorStale, SensorJump, SensorStuck, SensorDisagree, E2eRejects, BusErrorFrames,
+    SensorInvalid, SensorStale, SensorJump, SensorStuck, SensorDisagree, SensorSignFlip, E2eRejects, BusErrorFrames,
     BusErrorPassive, BusOff, BusGone, BusSendFailures, ForeignCommand, DriveFault, HydraulicPressure,
-    ActuatorStatusStale, ForceTracking, LoopOverruns, EStop, OperatorStop, OperatorTrip,
+    ActuatorStatusStale, ForceTracking, LoopStall, EStop, OperatorStop, OperatorTrip,
 ])
 def test_each_detector_documents_detects_bound_action_reset(cls: type) -> None:
     doc = cls.__doc__ or ""

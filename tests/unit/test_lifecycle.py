@@ -7,7 +7,7 @@ import itertools
 import pytest
 
 from harness.errors import SafetyError
-from harness.safety.config import SafetyConfig
+from harness.safety.config import SafetyConfig, SensorConfig
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import (
     DRIVE_STATES,
@@ -191,7 +191,9 @@ def test_armed_enables_the_drive_at_zero_force() -> None:
 @pytest.mark.parametrize("ramp_s", [0.2, 0.5, 1.0])
 def test_stopping_ramps_to_zero_within_the_ramp_time_then_disables(ramp_s: float) -> None:
     config = SafetyConfig()
-    config = type(config)(run=type(config.run)(stopping_ramp_s=ramp_s))
+    # the measurements here are noise-free, so every channel repeats to the bit: a real sensor's never
+    # does, and sensor_stuck would (rightly) trip after stuck_samples ticks; this test is about the ramp
+    config = type(config)(run=type(config.run)(stopping_ramp_s=ramp_s), sensors=SensorConfig(stuck_samples=10**6))
     sup, health = _armed_running(config)
     force = 5000.0
     for k in range(1, 50):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import re
 import threading
@@ -245,7 +246,7 @@ def test_bad_requests_raise_run_folder_error(tmp_path: Path, kind: str, columns:
 
 
 def test_unknown_outcome_is_refused(folder: RunFolder) -> None:
-    with pytest.raises(RunFolderError, match="expected one of completed, stopped, tripped, error, incomplete"):
+    with pytest.raises(RunFolderError, match="expected one of completed, stopped, tripped, refused, error, incomplete"):
         folder.finish("aborted")
 
 
@@ -297,3 +298,84 @@ def test_interrupt_flushes_the_data_but_leaves_the_run_incomplete(tmp_path: Path
 def test_git_commit_is_a_hash_or_absent(folder: RunFolder) -> None:
     commit = json.loads((folder.path / "metadata.json").read_text())["git_commit"]
     assert commit is None or re.fullmatch(r"[0-9a-f]{40}", commit)
+
+
+class _FileTooLarge:
+    """Stands in for ``signals.csv``: takes ``limit`` rows, then fails as a file-size limit does (EFBIG)."""
+
+    def __init__(self, real, limit: int):
+        self.real, self.limit, self.rows = real, limit, 0
+
+    def write(self, text: str) -> int:
+        self.rows += text.count("\n")
+        if self.rows > self.limit:
+            raise OSError(errno.EFBIG, "File too large")
+        return self.real.write(text)
+
+    def __getattr__(self, name: str):
+        return getattr(self.real, name)
+
+
+def test_a_file_size_limit_is_counted_as_lost_rows_frames_and_events(tmp_path: Path) -> None:
+    """Rows the queue accepted but the writer could not write count as lost, as well as queue drops."""
+    run = RunFolder.create(tmp_path, "p", "dry-run", {}, ("t_s", "x_m"), row_capacity=64)
+    run._writer._signals = _FileTooLarge(run._writer._signals, limit=32)
+    run.start()
+    for i in range(32):
+        run.record_row((i * 0.002, 0.0))
+    assert _wait_for(lambda: run.rows_written == 32)
+    run.record_event(0.1, "lifecycle", "armed")
+    assert _wait_for(lambda: run._writer.events_written == 1)
+    for i in range(32, 52):  # the next drain writes past the limit
+        run.record_row((i * 0.002, 0.0))
+    assert _wait_for(lambda: run.writer_error is not None)
+    for i in range(52, 132):  # the tick carries on: the ring fills up, then drops
+        run.record_row((i * 0.002, 0.0))
+    for _ in range(3):
+        run.record_frame(can.Message(arbitration_id=0x10, data=b"\x01"))
+    run.record_event(0.3, "lifecycle", "done")
+    run.record_event(0.3, "lifecycle", "disabled")
+    run.finish("completed")
+
+    meta = json.loads((run.path / "metadata.json").read_text())
+    assert meta["outcome"] == "completed" and meta["record_complete"] is False
+    recorder = meta["recorder"]
+    assert recorder["rows_written"] == 32
+    assert recorder["lost"] == {"rows": 100, "frames": 3, "events": 2}  # 132 handed over, 32 confirmed
+    assert recorder["dropped"]["rows"] > 0  # part of the 100: the ring filled once the writer stopped
+    assert "File too large" in recorder["error"]
+    assert not run.record_complete
+    assert run.record_problem().startswith("lost 100 of 132 rows, 3 frames, 2 events (OSError: [Errno 27] File too large")
+    data = load_run(run.path)
+    assert data.n_rows >= 32 and data["t_s"][:32].tolist() == pytest.approx([i * 0.002 for i in range(32)])
+    assert any("the record is incomplete: 100 rows, 3 frames, 2 events lost" in note for note in data.warnings)
+    failed = [e for e in data.events if e["name"] == "recorder_failed"]
+    assert failed and failed[0]["kind"] == "fault" and "File too large" in failed[0]["detail"]["error"]
+
+
+def test_a_whole_record_is_marked_complete(folder: RunFolder) -> None:
+    folder.start()
+    for row in _rows(10):
+        folder.record_row(row)
+    folder.record_frame(can.Message(arbitration_id=0x10, data=b"\x01"))
+    folder.finish("completed")
+    meta = json.loads((folder.path / "metadata.json").read_text())
+    assert meta["record_complete"] is True
+    assert meta["recorder"]["lost"] == {"rows": 0, "frames": 0, "events": 0}
+    assert folder.record_complete and folder.record_problem() == ""
+
+
+def test_metadata_that_cannot_be_rewritten_leaves_the_run_incomplete_not_a_crash(
+    folder: RunFolder, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import harness.record.runfolder as runfolder_module
+
+    def disk_full(path: Path, data: dict) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    folder.start()
+    monkeypatch.setattr(runfolder_module, "write_json_atomic", disk_full)
+    folder.finish("completed")
+    assert not folder.record_complete
+    assert "metadata.json not rewritten" in folder.record_problem()
+    assert load_run(folder.path).incomplete  # the file keeps the outcome written at the start

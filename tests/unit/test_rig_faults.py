@@ -39,10 +39,23 @@ def test_every_row_of_the_docstring_table_decodes_to_its_kind():
             assert decode_fault_id(int(base)) == (F.KINDS.index(kind), 0)
 
 
-@pytest.mark.parametrize("bad", [1, 9, 24, 34, 56, 81, 130, 255])
+@pytest.mark.parametrize("bad", [1, 9, 24, 34, 56, 81, 134, 140, 255])  # 130-133: sign_flip
 def test_unknown_fault_ids_are_refused(bad):
     with pytest.raises(FaultError, match=f"unknown fault id {bad}"):
         decode_fault_id(bad)
+
+
+def test_sign_flip_names_one_signal_of_a_sensor_message():
+    assert fault_id_for("sign_flip", "BASE_SENSORS") == 131
+    with pytest.raises(FaultError):
+        fault_id_for("sign_flip", "ACTUATOR_STATUS")
+    faults = FaultSet()
+    assert not faults.inject(131, 3.0) and not faults.inject(131, 0.5) and faults.unknown_ids == 2
+    assert faults.inject(131, 1.0)
+    faults.update(None)
+    assert faults.flipped_signal(1) == 1 and faults.flipped_signal(0) == -1
+    with pytest.raises(FaultError, match="0, 1 or 2"):
+        schedule_from([FaultSpec(kind="sign_flip", target="BASE_SENSORS", param=5.0)])
 
 
 def test_runtime_injection_and_clear():

@@ -1,0 +1,133 @@
+"""Pre-flight timing check: can this host hold the loop's rate within the stall budget?
+
+Before arming, the loop's own scheduler (sleep, then spin to the deadline) runs empty at
+the run's rate for about a second while the rest of the test set-up (the rig, the
+recorder) is already running, and the wake-up lateness is measured. The verdict:
+
+- **ok**: p99 lateness within one period and the largest within half the stall budget.
+- **marginal**: worse than that but p99 within the stall budget: stalls will happen and
+  be ridden through (counted, shown, recorded); an occasional one may exceed the budget.
+- **refused**: p99 lateness beyond the stall budget: more than 1 % of the wake-ups would
+  already trip ``loop_stall`` (a 30 s run at 500 Hz has 15 000 of them), so the run is
+  refused before anything moves (exit status 2), with the remedies.
+
+The clock and the sleep are injectable, as for the scheduler, so tests run on a fake clock.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.errors import SafetyError
+from harness.loop.scheduler import FixedRateScheduler
+from harness.safety.operator_detectors import HOST_TIMING_REMEDIES
+
+
+class HostTimingRefused(SafetyError):
+    """The host cannot hold the loop's rate within the stall budget (checked before arming)."""
+
+
+@dataclass(frozen=True)
+class HostTiming:
+    """Wake-up lateness of an empty loop at the run's rate, and the verdict.
+
+    Attributes
+    ----------
+    rate_hz : float
+        The rate measured at (Hz).
+    wakeups : int
+        Wake-ups measured.
+    p50_s, p99_s, max_s : float
+        Lateness against the deadline (s).
+    stall_budget_s : float
+        The run's stall budget (s), ``safety.run.max_stall_s``.
+    """
+
+    rate_hz: float
+    wakeups: int
+    p50_s: float
+    p99_s: float
+    max_s: float
+    stall_budget_s: float
+
+    @property
+    def verdict(self) -> str:
+        """``"ok"``, ``"marginal"`` or ``"refused"`` (see the module docstring)."""
+        if self.p99_s > self.stall_budget_s:
+            return "refused"
+        if self.p99_s > 1.0 / self.rate_hz or self.max_s > self.stall_budget_s / 2:
+            return "marginal"
+        return "ok"
+
+    def summary(self) -> str:
+        """One line for the console and the run's metadata."""
+        return (
+            f"host timing at {self.rate_hz:g} Hz over {self.wakeups} wake-ups: lateness p50 {self.p50_s * 1e6:.0f} us, "
+            f"p99 {self.p99_s * 1e6:.0f} us, max {self.max_s * 1e3:.2f} ms against a stall budget of "
+            f"{self.stall_budget_s * 1e3:.1f} ms: {self.verdict}"
+        )
+
+    def check(self) -> None:
+        """Raise :class:`HostTimingRefused` when the verdict is ``refused``."""
+        if self.verdict == "refused":
+            raise HostTimingRefused(
+                f"{self.summary()}; this host cannot run the loop within its stall budget, nothing was moved; "
+                + HOST_TIMING_REMEDIES
+            )
+
+    def as_dict(self) -> dict:
+        """Plain data for metadata.json."""
+        return {
+            "rate_hz": self.rate_hz, "wakeups": self.wakeups, "lateness_p50_s": self.p50_s,
+            "lateness_p99_s": self.p99_s, "lateness_max_s": self.max_s, "stall_budget_s": self.stall_budget_s,
+            "verdict": self.verdict,
+        }
+
+
+def measure_host_timing(
+    rate_hz: float,
+    stall_budget_s: float,
+    spin_s: float,
+    duration_s: float = 1.0,
+    clock: Callable[[], float] = time.perf_counter,
+    sleep: Callable[[float], None] = time.sleep,
+    poll: Callable[[], object] | None = None,
+) -> HostTiming:
+    """Run the loop's scheduler empty for ``duration_s`` and measure its wake-up lateness.
+
+    Parameters
+    ----------
+    rate_hz : float
+        The run's tick rate (Hz).
+    stall_budget_s : float
+        The run's stall budget (s).
+    spin_s : float
+        The loop's spin before each deadline (s), ``loop.spin_s``.
+    duration_s : float
+        How long to measure (s).
+    clock, sleep : callable
+        As for :class:`~harness.loop.scheduler.FixedRateScheduler`.
+    poll : callable, optional
+        Called at every wake-up: drain the bus as the loop would, so frames do not pile up.
+    """
+    period_s = 1.0 / rate_hz
+    wakeups = max(10, int(round(duration_s / period_s)))
+    lateness = np.empty(wakeups)
+    scheduler = FixedRateScheduler(period_s, spin_s, clock=clock, sleep=sleep)
+    scheduler.start()
+    previous = None
+    for k in range(wakeups):
+        scheduler.wait()
+        woke = clock()
+        # a wake-up that skipped deadlines is late by the whole gap since the previous one
+        gap = 0.0 if previous is None else woke - previous - period_s
+        lateness[k] = max(scheduler.lateness_s, gap)
+        previous = woke
+        if poll is not None:
+            poll()
+    p50, p99 = np.percentile(lateness, [50, 99])
+    return HostTiming(float(rate_hz), wakeups, float(p50), float(p99), float(lateness.max()), float(stall_budget_s))

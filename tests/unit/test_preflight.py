@@ -1,0 +1,63 @@
+"""The pre-flight timing check on a fake clock: verdicts, the refusal and its message."""
+
+from __future__ import annotations
+
+import pytest
+
+from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
+
+RATE_HZ = 500.0
+BUDGET_S = 0.02
+
+
+class LateClock:
+    """A clock whose sleeps overshoot: by ``late_s`` on every ``every``-th sleep, else by 10 us."""
+
+    def __init__(self, late_s: float, every: int) -> None:
+        self.now = 0.0
+        self.late_s, self.every, self.sleeps = late_s, every, 0
+
+    def __call__(self) -> float:
+        self.now += 1e-7
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.sleeps += 1
+        self.now += seconds + (self.late_s if self.sleeps % self.every == 0 else 1e-5)
+
+
+def _measure(late_s: float, every: int) -> HostTiming:
+    clock = LateClock(late_s, every)
+    return measure_host_timing(RATE_HZ, BUDGET_S, spin_s=0.0, duration_s=1.0, clock=clock, sleep=clock.sleep)
+
+
+def test_a_quiet_host_is_ok_and_polls_at_every_wakeup():
+    clock = LateClock(0.0, 10**9)
+    polls = []
+    timing = measure_host_timing(RATE_HZ, BUDGET_S, 0.0, 1.0, clock, clock.sleep, poll=lambda: polls.append(1))
+    assert timing.wakeups == 500 and len(polls) == 500
+    assert timing.verdict == "ok" and timing.p99_s < 1e-4
+    timing.check()  # does not raise
+
+
+def test_rare_stalls_beyond_half_the_budget_are_marginal_not_refused():
+    timing = _measure(0.015, every=250)  # two 15 ms stalls in a second
+    assert timing.max_s == pytest.approx(0.015, abs=0.002)
+    assert timing.verdict == "marginal"
+    timing.check()
+
+
+def test_a_host_that_misses_the_budget_often_is_refused_with_the_remedies():
+    timing = _measure(0.03, every=20)  # 5 % of the wake-ups 30 ms late
+    assert timing.p99_s > BUDGET_S and timing.verdict == "refused"
+    with pytest.raises(HostTimingRefused) as err:
+        timing.check()
+    text = str(err.value)
+    assert "p99" in text and "20.0 ms" in text and "nothing was moved" in text
+    assert "--rate" in text and "--lockstep" in text and "priority" in text
+
+
+def test_summary_and_metadata_carry_the_figures():
+    timing = HostTiming(500.0, 500, 1e-6, 3e-4, 4e-3, 0.02)
+    assert timing.as_dict()["verdict"] == "ok" and timing.as_dict()["lateness_p99_s"] == 3e-4
+    assert "p99 300 us" in timing.summary() and "max 4.00 ms" in timing.summary()
