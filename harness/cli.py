@@ -118,6 +118,10 @@ def _add_simulate(sub) -> None:
     )
     parser.add_argument("profile", nargs="?", help="profile YAML (default: profiles/nceer_4dof.yaml)")
     parser.add_argument("--variant", type=_non_empty, help="apply a named variant of the profile (e.g. a_mu_0.5)")
+    parser.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+        help="override a profile value, validated like the file, e.g. --set control.designs.phi.p1_per_s=8.0 (repeatable)",
+    )
     _add_record_options(parser)
     control = parser.add_argument_group("control")
     control.add_argument("--controller", type=_non_empty, metavar="NAME|none", help="a design of the profile, or 'none' (passive only)")
@@ -448,7 +452,7 @@ def _cmd_simulate(args: argparse.Namespace, console: Console) -> int:
     from harness.profile import load_profile
     from harness.study import StudyOptions, run_study
 
-    profile = load_profile(args.profile, variant=args.variant)
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     options = StudyOptions(
         record=args.record, records_dir=args.records_dir, pga_g=args.pga, time_scale=args.time_scale,
         duration_s=args.duration, controller=args.controller, rate_hz=args.rate, friction=args.friction,

@@ -80,9 +80,10 @@ class SessionResult:
         return OUTCOME_EXIT.get(self.outcome, exit_codes.INTERNAL_ERROR)
 
 
-def build_controller_for_rig(profile: Profile, name: str):
-    """The named design, refused if it needs states a rig does not measure."""
-    controller = make_controller(profile, name)
+def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale: float = 1.0):
+    """The named design (designed on story stiffnesses scaled by ``design_stiffness_scale``),
+    refused if it needs states a rig does not measure."""
+    controller = make_controller(profile, name, design_stiffness_scale)
     if controller.needs_full_state:
         raise ProfileError(
             f"controller {name!r} needs the full state Z; a rig measures only x_0, xdot_0, y_b, ydot_b. "

@@ -157,7 +157,7 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
         from harness.session import build_controller_for_rig
         from harness.twin import run_rig_twin
 
-        rig_controller = build_controller_for_rig(profile, name)
+        rig_controller = build_controller_for_rig(profile, name, scale)  # the same design as the ideal case
         result.cases["controlled"] = run_rig_twin(
             profile, motion, settings.rate_hz, rig_controller, asynchronous_delay_s=settings.transport_delay_s
         )

@@ -81,3 +81,37 @@ def test_design_stiffness_scale_changes_the_controlled_result(tmp_path, capsys):
     assert results["0.7"]["sampling"]["design_stiffness_scale"] == 0.7
     assert results["0.7"]["cases"]["controlled"]["drift_m"] != results["1.0"]["cases"]["controlled"]["drift_m"]
     assert results["0.7"]["cases"]["passive"] == results["1.0"]["cases"]["passive"]
+
+
+def test_rig_effects_keep_the_design_stiffness_scale(tmp_path, capsys, monkeypatch):
+    """--rig-effects with --design-stiffness-scale: the rig twin's controller is designed with the scale too."""
+    import harness.session as session
+
+    scales = []
+    original = session.make_controller
+
+    def spy(profile, name, design_stiffness_scale=1.0):
+        scales.append(design_stiffness_scale)
+        return original(profile, name, design_stiffness_scale)
+
+    monkeypatch.setattr(session, "make_controller", spy)
+    path = tmp_path / "twin.json"
+    status = main(["simulate", "--duration", "1", "--rig-effects", "--design-stiffness-scale", "0.7",
+                   "--json", str(path), "--quiet"])
+    capsys.readouterr()
+    assert status == 0
+    assert scales == [0.7]  # before the fix: 1.0, the scale silently dropped
+    assert json.loads(path.read_text())["sampling"]["design_stiffness_scale"] == 0.7
+
+
+def test_simulate_takes_set_validated_like_the_file(tmp_path, capsys):
+    peaks = {}
+    for p1 in ("0.315", "8.0"):
+        path = tmp_path / f"p1_{p1}.json"
+        status, _, _ = _run(["simulate", "--duration", "2", "--set", f"control.designs.phi.p1_per_s={p1}",
+                             "--json", str(path), "--quiet"], capsys)
+        assert status == 0
+        peaks[p1] = json.loads(path.read_text())["cases"]["controlled"]
+    assert peaks["8.0"] != peaks["0.315"]  # the override reached the controller
+    status, _, err = _run(["simulate", "--duration", "1", "--set", "control.designs.phi.p1_per_s=-1", "--quiet"], capsys)
+    assert status == 2 and "p1_per_s" in err and "Traceback" not in err
