@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness.errors import BusError
+from harness.loop.table_link import CanTableLink
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
 from harness.profile import Profile
@@ -32,8 +33,6 @@ from harness.simulation import CaseResult, SamplingSettings, run_case
 from harness.study import StudyOptions, make_controller, motion_facts, prepare_motion
 from harness.twin import run_rig_twin
 
-RIG_START = 1  # RIG_CONTROL command: start table
-RIG_STOP = 2  # RIG_CONTROL command: stop table
 #: The python-can interface (drivers/seqpacket.py) of the default dry run: the rig runs in its own
 #: process, on a Unix-socket bus that needs no set-up.
 PRIVATE_BUS_INTERFACE = "seqpacket"
@@ -93,7 +92,7 @@ def _rig_process(profile: Profile, options: DryRunOptions, can, rate_hz: float) 
 
 
 class RigCoordinator:
-    """The harness side's dealings with the virtual rig: wait for it, lockstep, start and stop the table.
+    """The harness side's dealings with the virtual rig: wait for it, lockstep; its :attr:`table` starts and stops the table.
 
     Parameters
     ----------
@@ -115,6 +114,8 @@ class RigCoordinator:
         self.appear_timeout_s = appear_timeout_s
         self.link = None
         self.base_step = 0
+        #: The virtual table's start and stop: the same RIG_CONTROL frames `harness run` sends a real one.
+        self.table = CanTableLink(lockstep)
 
     def _poll_until(self, done, timeout_s: float, what: str) -> None:
         deadline = time.monotonic() + timeout_s
@@ -133,6 +134,7 @@ class RigCoordinator:
     def on_link(self, link) -> None:
         """Wait for the rig's status frames; switch it to lockstep and note its step count."""
         self.link = link
+        self.table.attach(link)
         status = link.reader.sample("RIG_STATUS")
         self._poll_until(lambda: status.count > 0, self.appear_timeout_s, "no RIG_STATUS frame from a virtual rig")
         if self.lockstep:
@@ -141,13 +143,6 @@ class RigCoordinator:
             self._poll_until(lambda: status.count > seen, 5.0, "the rig did not answer the switch to lockstep")
             self.base_step = int(status.values[status.index("step_index")])
 
-    def on_start(self, t: float) -> None:
-        """RUNNING begins: start the table."""
-        self.link.writer.rig_control(RIG_START, self.lockstep, t)
-
-    def stop_table(self, now: float) -> bool:
-        """Stop the table (the ``stop_table`` trip action): RIG_CONTROL stop, lockstep flag kept."""
-        return self.link.writer.rig_control(RIG_STOP, self.lockstep, now)
 
     def lockstep_wait(self, tick):
         """The loop's lockstep wait: poll until the rig reports step ``base + k``."""
@@ -235,10 +230,10 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
             process = _rig_process(profile, options, can, rate_hz)
         coordinator = RigCoordinator(options.lockstep, 1.0 / rate_hz, process)
         session = run_session(
-            profile, settings, on_start=coordinator.on_start,
+            profile, settings, on_start=coordinator.table.start,
             make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
             on_link=coordinator.on_link, on_host_timing=on_host_timing, console=console,
-            stop_table=coordinator.stop_table,
+            stop_table=coordinator.table.stop,
         )
     finally:
         sys.setswitchinterval(switch_interval)

@@ -106,9 +106,9 @@ class ControlLoop:
         self.status = status or LoopStatus()
         self.scheduler = FixedRateScheduler(self.period_s, config.spin_s, clock=clock, sleep=sleep)
         self.signals = OperatorSignals()
-        #: Stalls ridden through (the loop went longer than 1.5 periods without a tick, within the budget).
+        #: Stalls ridden through (two periods or more between the starts of two ticks, within the budget).
         self.stalls = 0
-        #: Longest time between two consecutive ticks' commands so far (s).
+        #: Longest time between the starts of two consecutive ticks so far, counted when a stall (s).
         self.longest_stall_s = 0.0
         #: The stall budget (s): ridden through up to here, tripped beyond (the supervisor's ``loop_stall``).
         self.max_stall_s = tick.supervisor.config.run.max_stall_s

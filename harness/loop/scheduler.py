@@ -40,12 +40,9 @@ class FixedRateScheduler:
         Deadlines missed in total (the previous tick ran past this tick's deadline).
     consecutive_overruns : int
         Overruns in a row, reset by a tick on time.
-    missed_periods : int
-        Deadlines skipped before the current tick (0 when it woke on time).
     """
 
-    __slots__ = ("period_s", "spin_s", "_clock", "_sleep", "_start", "_deadline", "tick", "lateness_s", "overruns", "consecutive_overruns",
-                 "missed_periods")
+    __slots__ = ("period_s", "spin_s", "_clock", "_sleep", "_start", "_deadline", "tick", "lateness_s", "overruns", "consecutive_overruns")
 
     def __init__(
         self,
@@ -66,7 +63,6 @@ class FixedRateScheduler:
         self.lateness_s = 0.0
         self.overruns = 0
         self.consecutive_overruns = 0
-        self.missed_periods = 0
 
     def start(self) -> float:
         """Set tick 0's deadline to now; return it (the loop's time origin, s)."""
@@ -97,10 +93,8 @@ class FixedRateScheduler:
             self._deadline += missed * self.period_s
             self.tick += missed
             self.overruns += missed
-            self.missed_periods = missed
             self.consecutive_overruns += 1
         else:
-            self.missed_periods = 0
             self.consecutive_overruns = 0
         remaining = self._deadline - now - self.spin_s
         if remaining > 0:

@@ -54,8 +54,8 @@ NUMBER_FIELDS = (
     ("e2e_rejects", True, "frames rejected by the end-to-end protection"),
     ("error_frames", True, "CAN error frames seen"),
     ("send_failures", True, "frames that could not be sent"),
-    ("stalls", True, "stalls ridden through (more than 1.5 periods without a tick, within budget)"),
-    ("longest_stall_s", False, "longest time between two consecutive ticks' commands (s)"),
+    ("stalls", True, "stalls ridden through (two periods or more between two ticks' starts, within budget)"),
+    ("longest_stall_s", False, "longest time between the starts of two consecutive ticks in a stall (s)"),
     ("missed_periods", True, "tick periods skipped by the scheduler"),
 )
 #: Text fields: (name, capacity in UTF-8 bytes, default).
