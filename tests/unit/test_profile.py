@@ -25,7 +25,7 @@ def test_shipped_profiles_load_with_units_converted():
     assert rig.bearing.a_mu_s_per_m == pytest.approx(90.16)
     assert rig.bearing.yield_displacement_m == pytest.approx(2.54e-5)
     phi = rig.control.designs["phi"]
-    assert (phi.p1_per_s, phi.phi, phi.delta) == (0.315, 0.8, 0.0)
+    assert (phi.p1_per_s, phi.phi, phi.delta) == (8.0, 0.8, 0.0)
     assert "assumed" in rig.structure.assumptions
 
 
@@ -44,7 +44,7 @@ def test_extends_overrides_key_by_key(tmp_path):
     profile = load_profile(child)
     assert profile.name == "my_test"
     assert profile.control.designs["phi"].phi == 0.5
-    assert profile.control.designs["phi"].p1_per_s == 0.315
+    assert profile.control.designs["phi"].p1_per_s == 8.0
     assert profile.structure.base_mass_kg == 1148.62
 
 
@@ -90,7 +90,7 @@ BAD_PROFILES = {
     "string_for_number": (_rig_text().replace("mu_max: 0.06", "mu_max: lots"), "mu_max"),
     "bool_for_number": (_rig_text().replace("mu_max: 0.06", "mu_max: true"), "expected a number"),
     "phi_out_of_range": (_rig_text().replace("phi: 0.8", "phi: 1.5"), "expected a value >= 0 and <= 1"),
-    "p1_zero": (_rig_text().replace("p1_per_s: 0.315\n      phi", "p1_per_s: 0\n      phi"), "> 0"),
+    "p1_zero": (_rig_text().replace("p1_per_s: 8.0\n      phi", "p1_per_s: 0\n      phi"), "> 0"),
     "missing_section": (_rig_text().replace("bearing:", "bearingx:"), "unknown key 'bearingx'"),
     "huge_value": (_rig_text().replace("mu_max: 0.06", "mu_max: 1e400"), "finite|<= 1"),
     "nan_value": (_rig_text().replace("mu_max: 0.06", "mu_max: .nan"), "finite"),

@@ -1,0 +1,128 @@
+"""The rig's peaks on its three records, in the layout of the source's experimental tables.
+
+For El Centro (0.34 g), Hachinohe (0.23 g) and Pacoima (0.40 g), each with its time axis
+compressed by 2 and run for 30 s, it simulates the quarter-scale rig of
+``profiles/nceer_4dof.yaml`` passive (bearings only) and with the profile's controller
+(the phi controller, Eq. 22-23), exactly as ``harness simulate`` does, and prints one
+table: a row per response, and per record the passive peak, the controlled peak and the
+% reduction (SPEC 5), with the peak control force U in % of the total weight.
+
+Usage: python benchmarks/rig_table.py [--records-dir DIR] [--rig-effects] [--set KEY=VALUE ...] [--markdown]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from rich.console import Console  # noqa: E402
+from rich.table import Table  # noqa: E402
+
+from harness.peaks import flatten, reduction_pct  # noqa: E402
+from harness.profile import load_profile  # noqa: E402
+from harness.study import StudyOptions, run_study  # noqa: E402
+
+#: The rig's records and their peak table accelerations (g), SPEC 6b.
+RIG_RECORDS = (("el_centro", 0.34), ("hachinohe", 0.23), ("pacoima", 0.40))
+
+#: Rows of the table: (flattened peak key, label, unit, scale from SI, digits).
+ROWS = (
+    ("sliding_displacement_m", "sliding displacement x_b", "mm", 1e3, 1),
+    ("drift_1_m", "story 1 drift", "mm", 1e3, 2),
+    ("drift_2_m", "story 2 drift", "mm", 1e3, 2),
+    ("drift_3_m", "story 3 drift", "mm", 1e3, 2),
+    ("base_acceleration_m_s2", "base mat acceleration", "m/s²", 1.0, 2),
+    ("floor_acceleration_1_m_s2", "floor 1 acceleration", "m/s²", 1.0, 2),
+    ("floor_acceleration_2_m_s2", "floor 2 acceleration", "m/s²", 1.0, 2),
+    ("floor_acceleration_3_m_s2", "floor 3 acceleration", "m/s²", 1.0, 2),
+)
+
+
+def rig_peaks(profile_path: Path, records_dir: str, rig_effects: bool, overrides: list[str]) -> dict:
+    """Passive and controlled flattened peaks (SI) per record name, simulated as ``harness simulate`` does."""
+    profile = load_profile(profile_path, overrides=overrides)
+    results = {}
+    for record, pga_g in RIG_RECORDS:
+        options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0,
+                               duration_s=30.0, rig_effects=rig_effects)
+        study = run_study(profile, options)
+        results[record] = {case: flatten(result.peaks) for case, result in study.cases.items()}
+    return results
+
+
+def cells(passive: float, controlled: float, scale: float, digits: int) -> list[str]:
+    """Passive, controlled and % reduction of one response, formatted."""
+    reduction = reduction_pct(passive, controlled)
+    return [f"{passive * scale:.{digits}f}", f"{controlled * scale:.{digits}f}",
+            "-" if reduction is None else f"{reduction:.0f}"]
+
+
+def table_rows(results: dict) -> list[list[str]]:
+    """One list of cells per response row, then the control force row."""
+    rows = []
+    for key, label, unit, scale, digits in ROWS:
+        row = [label, unit]
+        for record, _ in RIG_RECORDS:
+            row += cells(results[record]["passive"][key], results[record]["controlled"][key], scale, digits)
+        rows.append(row)
+    force = ["control force U", "% W"]
+    for record, _ in RIG_RECORDS:
+        force += ["0", f"{results[record]['controlled']['peak_force_pct_weight']:.1f}", ""]
+    rows.append(force)
+    return rows
+
+
+def headers() -> list[str]:
+    """Column headers: response, unit, then passive / controlled / reduction per record."""
+    names = ["response", "unit"]
+    for record, pga_g in RIG_RECORDS:
+        names += [f"{record} {pga_g:.2f} g passive", f"{record} controlled", f"{record} reduction %"]
+    return names
+
+
+def print_markdown(rows: list[list[str]]) -> None:
+    """The table as GitHub markdown, for benchmarks/README.md."""
+    names = headers()
+    print("| " + " | ".join(names) + " |")
+    print("|" + "---|" * len(names))
+    for row in rows:
+        print("| " + " | ".join(row) + " |")
+
+
+def print_rich(rows: list[list[str]], title: str) -> None:
+    """The table in the terminal."""
+    table = Table(title=title, title_justify="left")
+    for i, name in enumerate(headers()):
+        table.add_column(name, justify="left" if i < 2 else "right")
+    for row in rows:
+        table.add_row(*row)
+    Console(width=200).print(table)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--profile", default=str(REPO / "profiles" / "nceer_4dof.yaml"))
+    parser.add_argument("--records-dir", default=str(REPO.parent / "shared" / "data" / "ground_motions"),
+                        help="folder with el_centro, hachinohe and pacoima (default ../shared/data/ground_motions)")
+    parser.add_argument("--rig-effects", action="store_true",
+                        help="controlled case through the rig's sensor, actuator and safety models")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+                        help="override a profile value, e.g. control.designs.phi.p1_per_s=0.315")
+    parser.add_argument("--markdown", action="store_true", help="print markdown instead of a rich table")
+    args = parser.parse_args()
+    results = rig_peaks(Path(args.profile), args.records_dir, args.rig_effects, args.overrides)
+    rows = table_rows(results)
+    if args.markdown:
+        print_markdown(rows)
+    else:
+        kind = "rig effects" if args.rig_effects else "ideal control"
+        print_rich(rows, f"peak responses of the rig, passive and controlled ({kind}), time scale 2, 30 s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
