@@ -117,11 +117,7 @@ def _add_simulate(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("profile", nargs="?", help="profile YAML (default: profiles/nceer_4dof.yaml)")
-    parser.add_argument("--variant", type=_non_empty, help="apply a named variant of the profile (e.g. a_mu_0.5)")
-    parser.add_argument(
-        "--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
-        help="override a profile value, validated like the file, e.g. --set control.designs.phi.p1_per_s=8.0 (repeatable)",
-    )
+    _add_overrides(parser, "control.designs.phi.p1_per_s=8.0")
     _add_record_options(parser)
     control = parser.add_argument_group("control")
     control.add_argument("--controller", type=_non_empty, metavar="NAME|none", help="a design of the profile, or 'none' (passive only)")
@@ -182,6 +178,7 @@ def _add_records(sub) -> None:
     )
     parser.add_argument("record", nargs="?", metavar="NAME|PATH")
     parser.add_argument("--profile", type=_non_empty, help="take scaling and the table's limits from this profile")
+    _add_overrides(parser, "table.stroke_limit_m=0.1")
     parser.add_argument("--records-dir", type=_non_empty, metavar="DIR", help="where named records are found")
     parser.add_argument("--pga", type=_in(PGA), metavar="G", help=f"scale to this PGA (g), {PGA.describe()}")
     parser.add_argument("--time-scale", type=_in(TIME_SCALE), metavar="F", help=f"compress time by F, {TIME_SCALE.describe()}")
@@ -196,13 +193,18 @@ def _add_bus_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--channel", type=_non_empty, metavar="C", help="channel, e.g. vcan0, can0, PCAN_USBBUS1")
 
 
-def _add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> None:
-    parser.add_argument("profile", nargs="?", help=default_help)
-    parser.add_argument("--variant", type=_non_empty, help="apply a named variant of the profile")
+def _add_overrides(parser: argparse.ArgumentParser, example: str) -> None:
+    """``--variant`` and ``--set``: every command that loads a profile takes both, validated like the file."""
+    parser.add_argument("--variant", type=_non_empty, help="apply a named variant of the profile (e.g. a_mu_0.5)")
     parser.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
-        help="override a profile value, e.g. --set safety.stroke.hard_limit_m=0.05 (repeatable)",
+        help=f"override a profile value, validated like the file, e.g. --set {example} (repeatable)",
     )
+
+
+def _add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> None:
+    parser.add_argument("profile", nargs="?", help=default_help)
+    _add_overrides(parser, "safety.stroke.hard_limit_m=0.05")
     parser.add_argument(
         "--allow-weaker-safety", action="store_true",
         help="accept --set values that weaken the profile's own safety settings; each is recorded in metadata.json, "
@@ -626,7 +628,7 @@ def _cmd_records(args: argparse.Namespace, console: Console) -> int:
     from harness.records import list_records, records_dir_from, summarize
     from harness.study import StudyOptions, prepare_motion
 
-    profile = load_profile(args.profile)
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     if args.record is None:
         directory = records_dir_from(args.records_dir, profile.record.records_dir, base_dir=profile.base_dir)
         table = Table(title=f"records in {directory or '(no records directory set)'}", title_justify="left")

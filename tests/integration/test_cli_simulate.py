@@ -115,3 +115,22 @@ def test_simulate_takes_set_validated_like_the_file(tmp_path, capsys):
     assert peaks["8.0"] != peaks["0.315"]  # the override reached the controller
     status, _, err = _run(["simulate", "--duration", "1", "--set", "control.designs.phi.p1_per_s=-1", "--quiet"], capsys)
     assert status == 2 and "p1_per_s" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command", ["simulate", "dry-run", "rig", "run", "records"])
+def test_every_command_that_loads_a_profile_refuses_a_bad_set_the_same_way(command, capsys):
+    """--set and --variant are accepted by every profile-loading command and validated before anything runs."""
+    profile_args = ["--profile", str(PROFILES / "nceer_4dof.yaml")] if command == "records" else []
+    status, _, err = _run([command, *profile_args, "--set", "control.designs.phi.p1_per_s=-1"], capsys)
+    assert status == 2 and "control.designs.phi.p1_per_s" in err and "> 0" in err and "Traceback" not in err
+    status, _, err = _run([command, *profile_args, "--variant", "no_such_variant"], capsys)
+    assert status == 2 and "no_such_variant" in err and "Traceback" not in err
+
+
+def test_records_applies_set_to_the_profile_it_loads(capsys):
+    """`records --set` reaches the profile: a smaller table stroke refuses the same record."""
+    base = ["records", "synthetic", "--profile", str(PROFILES / "nceer_4dof.yaml"), "--pga", "0.34"]
+    status, out, _ = _run(base, capsys)
+    assert status == 0 and "fits the table" in out
+    status, _, err = _run([*base, "--set", "table.stroke_limit_m=0.005"], capsys)
+    assert status == 2 and "stroke" in err
