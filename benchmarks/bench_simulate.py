@@ -6,7 +6,13 @@ with the same controller, sampling and friction estimate, and reports wall times
 the real-time factor (simulated seconds per wall second), the speed ratio, and the
 largest relative difference of any peak.
 
-Usage: python benchmarks/bench_simulate.py [--records-dir DIR] [--repeat N] [--json PATH]
+With --startup it times whole commands as a user types them instead (issue 12, item 4):
+the warm `harness simulate` of the eight-story building (El Centro 0.3 g, 30 s, OF-I,
+2 x 30 s simulated), `harness --help`, and the floors under them (a bare interpreter,
+``import numpy``, ``import numba``, importing the profile loader), each the median of
+--repeat fresh processes. Targets: the simulate command 1.0 s or less, --help 0.3 s or less.
+
+Usage: python benchmarks/bench_simulate.py [--records-dir DIR] [--repeat N] [--json PATH] [--startup]
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ import argparse
 import json
 import platform
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -50,12 +57,55 @@ def run(plant_class, profile, table, controller_name, rate_hz):
     return time.perf_counter() - started, result
 
 
+def wall_time_s(argv: list[str]) -> float:
+    """Wall time (s) of one fresh process running ``argv`` to completion; raises if it fails."""
+    started = time.perf_counter()
+    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=REPO)
+    return time.perf_counter() - started
+
+
+def startup(records_dir: str, repeat: int, json_path: str) -> int:
+    """Median wall times (s) of whole commands and of the imports under them, in one run."""
+    python, harness = sys.executable, str(Path(sys.executable).parent / "harness")
+    simulate = [harness, "simulate", "profiles/eight_story.yaml", "--records-dir", records_dir, "--record", "el_centro",
+                "--pga", "0.3", "--duration", "30", "--controller", "OF-I", "--quiet"]
+    commands = [
+        ("python -c pass", [python, "-c", "pass"], None),
+        ("import numpy", [python, "-c", "import numpy"], None),
+        ("import numba", [python, "-c", "import numba"], None),
+        ("import harness.profile", [python, "-c", "import harness.profile"], None),
+        ("harness --help", [harness, "--help"], 0.3),
+        ("harness simulate eight_story OF-I (2 x 30 s)", simulate, 1.0),
+    ]
+    wall_time_s(simulate)  # warm the kernel cache and the page cache
+    rows = []
+    for label, argv, target in commands:
+        times = [wall_time_s(argv) for _ in range(repeat)]
+        rows.append({"command": label, "wall_s_median": statistics.median(times), "wall_s_min": min(times),
+                     "target_s": target})
+    Path(json_path).parent.mkdir(parents=True, exist_ok=True)
+    Path(json_path).write_text(json.dumps({"machine": platform.platform(), "python": sys.version.split()[0],
+                                           "repeat": repeat, "rows": rows}, indent=2) + "\n")
+    print("| command | median wall (s) | min (s) | target (s) |")
+    print("|---|---|---|---|")
+    for r in rows:
+        target = "" if r["target_s"] is None else f"{r['target_s']:.1f}"
+        print(f"| {r['command']} | {r['wall_s_median']:.2f} | {r['wall_s_min']:.2f} | {target} |")
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--records-dir", default=str(REPO.parent / "shared" / "data" / "ground_motions"))
     parser.add_argument("--repeat", type=int, default=5)
-    parser.add_argument("--json", default=str(REPO / "benchmarks" / "results" / "simulate.json"))
+    parser.add_argument("--json", default=None, help="raw results (default benchmarks/results/simulate.json, "
+                        "or startup.json with --startup)")
+    parser.add_argument("--startup", action="store_true", help="time whole commands and imports instead")
     args = parser.parse_args()
+    results = REPO / "benchmarks" / "results"
+    if args.startup:
+        return startup(args.records_dir, args.repeat, args.json or str(results / "startup.json"))
+    args.json = args.json or str(results / "simulate.json")
     rows = []
     for label, profile_file, record, pga, time_scale, controller, rate, target in CASES:
         profile = load_profile(REPO / "profiles" / profile_file)

@@ -18,8 +18,6 @@ so that delta has one meaning across controllers.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
-import scipy.signal
 
 from harness.errors import ModelError
 from harness.model.building import StateSpace
@@ -28,6 +26,8 @@ from harness.model.building import StateSpace
 def regular_form(b_vector: np.ndarray) -> np.ndarray:
     """Orthogonal T with ``T B = (0, ..., 0, |B|)``."""
     b = np.asarray(b_vector, dtype=float).reshape(-1, 1)
+    import scipy.linalg  # imported where used: scipy costs about 0.5 s at start-up
+
     null_basis = scipy.linalg.null_space(b.T)  # N x (N-1), orthonormal
     return np.vstack([null_basis.T, (b / np.linalg.norm(b)).T])
 
@@ -73,6 +73,8 @@ def lqr_surface(model: StateSpace, q_diagonal: np.ndarray) -> np.ndarray:
     q11, q12, q22 = q_reduced[:-1, :-1], q_reduced[:-1, -1:], q_reduced[-1:, -1:]
     if q22[0, 0] <= 0:
         raise ModelError("the LQR weight on the regular-form force coordinate is zero; give the velocities a positive weight")
+    import scipy.linalg
+
     try:
         riccati = scipy.linalg.solve_continuous_are(a11, a12, q11, q22, s=q12)
     except (np.linalg.LinAlgError, ValueError) as err:
@@ -87,6 +89,8 @@ def pole_surface(model: StateSpace, poles_per_s: np.ndarray) -> np.ndarray:
     t_matrix, a11, a12 = _partition(model, model.A)
     if len(poles) != a11.shape[0]:
         raise ModelError(f"pole assignment needs {a11.shape[0]} poles (N - 1), found {len(poles)}")
+    import scipy.signal  # imported where used: about 1 s at start-up
+
     try:
         placed = scipy.signal.place_poles(a11, a12, poles)
     except ValueError as err:

@@ -27,7 +27,6 @@ Three pieces, used in this order by :func:`harness.records.processing.process_re
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from harness.records.integration import integrate_from_rest
 
@@ -62,6 +61,8 @@ def highpass(accel_m_s2: np.ndarray, dt_s: float, corner_hz: float, order: int) 
     The record is padded with ``3 / corner_hz`` seconds of zeros at both ends before
     filtering forward and backward (effective order ``2 * order``) and cut back.
     """
+    from scipy import signal  # imported here: about 1 s at start-up, and only this filter needs it
+
     sos = signal.butter(order, corner_hz, btype="highpass", fs=1.0 / dt_s, output="sos")
     pad = int(np.ceil(3.0 / (corner_hz * dt_s)))
     padded = np.concatenate([np.zeros(pad), accel_m_s2, np.zeros(pad)])

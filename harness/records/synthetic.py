@@ -28,7 +28,6 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from scipy import signal
 
 from harness.errors import RecordError
 from harness.records.accel_units import G_M_S2
@@ -84,6 +83,8 @@ def synthetic_record(
     n = int(round(duration_s / dt_s)) + 1
     t = np.arange(n) * dt_s
     noise = np.random.default_rng(seed).standard_normal(n)
+    from scipy import signal  # imported here: about 1 s at start-up, and only the synthetic record needs it
+
     sos = clough_penzien_sos(dt_s, omega_g_rad_s, zeta_g, omega_f_rad_s, zeta_f)
     accel = signal.sosfilt(sos, noise) * envelope_shape(t, t[-1], envelope, peak_fraction, end_amplitude)
     accel *= pga_g * G_M_S2 / np.max(np.abs(accel))
@@ -99,6 +100,8 @@ def clough_penzien_sos(dt_s: float, omega_g: float, zeta_g: float, omega_f: floa
     zeros = np.array([-omega_g / (2.0 * zeta_g), 0.0, 0.0])
     poles = np.concatenate([np.roots([1.0, 2 * zeta_g * omega_g, omega_g**2]), np.roots([1.0, 2 * zeta_f * omega_f, omega_f**2])])
     gain = 2.0 * zeta_g * omega_g
+    from scipy import signal
+
     z_d, p_d, k_d = signal.bilinear_zpk(zeros, poles, gain, fs=1.0 / dt_s)
     return signal.zpk2sos(z_d, p_d, k_d)
 
