@@ -1,0 +1,62 @@
+"""``harness rig``: serve the virtual rig on a bus."""
+
+from __future__ import annotations
+
+import argparse
+
+from rich.console import Console
+
+from harness.commands.options import (
+    EPILOG,
+    PID,
+    RATE,
+    SEED,
+    add_bus_options,
+    add_profile_options,
+    add_record_options,
+    load_acknowledged,
+    number_in,
+    study_options,
+    wrap,
+)
+from harness.commands.output import compile_kernels, stop_on_signals
+
+
+def add_parser(sub) -> None:
+    parser = sub.add_parser(
+        "rig",
+        help="serve the virtual rig on a bus (for dry runs across processes)",
+        description=wrap(
+            "Serve the virtual 4-DOF rig (table, plant on friction bearings, sensors, servo actuator with "
+            "its drive watchdog, fault injection) on a CAN channel until Ctrl-C, in real time or in lockstep "
+            "(one step per actuator command). The harness side is `harness dry-run --external-rig` on the "
+            "same channel. The drive is disabled on the way out."
+        ),
+        epilog="example:\n  harness rig profiles/nceer_4dof.yaml --interface socketcan --channel vcan0\n\n" + EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    add_profile_options(parser, "profile YAML (default: profiles/nceer_4dof.yaml)")
+    add_record_options(parser)
+    add_bus_options(parser)
+    parser.add_argument("--rate", type=number_in(RATE), metavar="HZ",
+                        help=f"the harness's loop rate: the rig's step period is 1/HZ, {RATE.describe()}")
+    parser.add_argument("--lockstep", action="store_true", help="advance one step per actuator command")
+    parser.add_argument("--seed", type=number_in(SEED), help=f"noise seed (default: rig.seed of the profile), {SEED.describe()}")
+    parser.add_argument("--parent-pid", type=number_in(PID), metavar="PID",
+                        help="stop serving (drive disabled) when process PID is gone; `harness dry-run` sets it")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, console: Console) -> int:
+    from harness.rig import run_rig_command
+
+    with stop_on_signals():
+        load_acknowledged(args, console)  # the rig serves the harness's profile: the same acknowledgement
+        compile_kernels(console)
+        options = study_options(args, rate_hz=args.rate)
+        console.print(f"virtual rig on {args.interface or 'the profile interface'}:{args.channel or 'the profile channel'}"
+                      f"{' (lockstep)' if args.lockstep else ''}; Ctrl-C stops it")
+        return run_rig_command(
+            args.profile, interface=args.interface, channel=args.channel, lockstep=args.lockstep, options=options,
+            seed=args.seed, variant=args.variant, overrides=tuple(args.overrides), parent_pid=args.parent_pid,
+        )

@@ -1,0 +1,110 @@
+"""``harness run``: the real rig, the same loop without the virtual rig."""
+
+from __future__ import annotations
+
+import argparse
+
+from rich.console import Console
+from rich.markup import escape
+
+from harness import exit_codes
+from harness.commands.options import (
+    EPILOG,
+    RATE,
+    add_bus_options,
+    add_profile_options,
+    add_record_options,
+    load_acknowledged,
+    non_empty,
+    number_in,
+    output_dir,
+    study_options,
+    wrap,
+)
+from harness.commands.output import (
+    compile_kernels,
+    print_host_timing,
+    print_outcome,
+    print_timing,
+)
+
+#: What ``table.link: none`` means for a run, printed before arming.
+NO_TABLE_LINK = (
+    "table.link is none: the table controller is not on the CAN bus. The harness will not start or stop the "
+    "table: start it yourself once the run is RUNNING; record time follows the harness's clock, not the table's; "
+    "a trip cannot stop the table (stop_table trip actions are skipped), stop it at its own console."
+)
+
+
+def _announce_table_link(profile, console: Console):
+    """The run's table link (``table.link``): a :class:`CanTableLink`, or None with the consequence printed."""
+    from harness.loop.table_link import CanTableLink
+
+    if profile.table is None or profile.table.link == "can":
+        console.print("table: RIG_CONTROL start at RUNNING, stop at the end and on a trip; record time counts from the "
+                      "table controller's RIG_STATUS table_running (table.link: can)", highlight=False)
+        return CanTableLink(lockstep=False)
+    console.print(f"[bold yellow]{escape(NO_TABLE_LINK)}[/]", highlight=False)
+    return None
+
+
+def add_parser(sub) -> None:
+    parser = sub.add_parser(
+        "run",
+        help="the real rig: the same loop, no virtual rig",
+        description=wrap(
+            "Run the control loop against the real rig on a CAN channel: the same code as a dry run "
+            "without the virtual rig. The lab's table controller plays the record; this command runs for "
+            "the record's duration (from the profile or --duration). It asks before it arms the actuator "
+            "(--yes skips the question). Ctrl-C stops safely (ramp down, drive off); a second Ctrl-C trips."
+        ),
+        epilog="example:\n  harness run profiles/my_rig.yaml --interface socketcan --channel can0\n\n" + EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    add_profile_options(parser, "profile YAML of the rig")
+    add_record_options(parser)
+    add_bus_options(parser)
+    parser.add_argument("--rate", type=number_in(RATE), metavar="HZ",
+                        help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}")
+    parser.add_argument("--controller", type=non_empty, metavar="NAME", help="a design of the profile")
+    parser.add_argument("--yes", action="store_true", help="do not ask before arming")
+    parser.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
+    parser.add_argument("--quiet", action="store_true", help="no live console")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, console: Console) -> int:
+    from pathlib import Path
+
+    from harness.dryrun import LOG_DIR
+    from harness.session import SessionSettings, run_session
+    from harness.study import motion_facts, prepare_motion
+
+    profile = load_acknowledged(args, console)
+    motion = prepare_motion(profile, study_options(args))
+    rate = args.rate if args.rate is not None else profile.loop.rate_hz
+    can = profile.can_settings(args.interface, args.channel, rate)
+    controller = args.controller or profile.control.controller
+    table_link = _announce_table_link(profile, console)
+    if not args.yes:
+        try:
+            answer = console.input(
+                f"Arm the actuator on {can.interface}:{can.channel} with {controller} for {motion.duration_s:.1f} s "
+                f"(max force {profile.safety.force.max_force_N / 1e3:g} kN, hard stroke {profile.safety.stroke.hard_limit_m * 1e3:g} mm)? [y/N] "
+            )
+        except (EOFError, OSError):  # no terminal to answer from (stdin closed or captured): that is a no
+            answer = ""
+        if answer.strip().lower() not in ("y", "yes"):
+            console.print("not armed")
+            return exit_codes.INPUT_ERROR
+    settings = SessionSettings(
+        kind="run", can=can, rate_hz=rate, duration_s=motion.duration_s, controller=controller,
+        log_dir=Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
+        metadata={"record": motion_facts(motion), "table_link": "can" if table_link is not None else "none"},
+    )
+    compile_kernels(console)
+    session = run_session(profile, settings, console=console, on_host_timing=print_host_timing(console),
+                          table_link=table_link)
+    print_timing(console, session.loop.timing, rate)
+    print_outcome(console, session, weakened=profile.safety_weakened)
+    return session.exit_code
