@@ -36,7 +36,7 @@ from harness.peaks import flatten  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
 from harness.records import load_motion  # noqa: E402
 from harness.simulation import SamplingSettings, run_case  # noqa: E402
-from harness.study import make_controller  # noqa: E402
+from harness.control.factory import make_controller  # noqa: E402
 
 CASES = [
     # (label, profile, record, pga, time scale, controller, rate Hz, target real-time factor)

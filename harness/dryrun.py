@@ -30,7 +30,8 @@ from harness.profile import Profile
 from harness.record import load_run
 from harness.session import SessionResult, SessionSettings, run_peaks, run_session
 from harness.simulation import CaseResult, SamplingSettings, run_case
-from harness.study import StudyOptions, make_controller, motion_facts, prepare_motion
+from harness.control.factory import make_controller
+from harness.study import StudyOptions, motion_facts, prepare_motion
 from harness.twin import run_rig_twin
 
 #: The python-can interface (drivers/seqpacket.py) of the default dry run: the rig runs in its own

@@ -18,6 +18,7 @@ from drivers.link import open_harness
 from harness import exit_codes
 from harness.console import LiveConsole
 from harness.control.estimator import FrictionEstimator
+from harness.control.factory import build_controller_for_rig
 from harness.errors import ProfileError
 from harness.loop.row import COLUMNS, N_STORIES
 from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
@@ -31,7 +32,6 @@ from harness.record import RunFolder, load_run
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
 from harness.safety.weakening import summary
-from harness.study import make_controller
 
 OUTCOME_EXIT = {"completed": exit_codes.OK, "tripped": exit_codes.TRIPPED, "stopped": exit_codes.STOPPED}
 
@@ -78,19 +78,6 @@ class SessionResult:
         if self.outcome == "completed" and not self.record_complete:
             return exit_codes.TRIPPED
         return OUTCOME_EXIT.get(self.outcome, exit_codes.INTERNAL_ERROR)
-
-
-def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale: float = 1.0):
-    """The named design (designed on story stiffnesses scaled by ``design_stiffness_scale``),
-    refused if it needs states a rig does not measure."""
-    controller = make_controller(profile, name, design_stiffness_scale)
-    if controller.needs_full_state:
-        raise ProfileError(
-            f"controller {name!r} needs the full state Z; a rig measures only x_0, xdot_0, y_b, ydot_b. "
-            "Use a phi or simple_output design on the table (full-state designs are for harness simulate)",
-            profile.source_path, "control.controller",
-        )
-    return controller
 
 
 def bus_statistics(link) -> dict:

@@ -12,9 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness.control.designs import Controller, build_controller
+from harness.control.factory import build_controller_for_rig, make_controller
 from harness.control.estimator import FrictionEstimator
-from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
 from harness.profile import Profile
 from harness.records import check_table_limits, load_motion
@@ -104,21 +103,6 @@ def prepare_motion(profile: Profile, options: StudyOptions):
     return motion
 
 
-def make_controller(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
-    """Build the named design of ``profile`` on its (possibly mis-scaled) design model."""
-    designs = profile.control.designs
-    if name not in designs:
-        raise ProfileError(
-            f"unknown controller {name!r}; this profile has {', '.join(designs)} (or 'none' for passive only)",
-            profile.source_path,
-            "control.designs",
-        )
-    design_building = profile.structure
-    if design_stiffness_scale != 1.0:
-        design_building = design_building.with_stiffness_scale(design_stiffness_scale)
-    return build_controller(name, designs[name], design_building)
-
-
 def sampling_settings(profile: Profile, options: StudyOptions) -> SamplingSettings:
     """Controller sampling from the profile with the overrides."""
     control = profile.control
@@ -154,7 +138,6 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
 
     result.cases["passive"] = run_case("passive", plant, duration, settings, progress=reporter("passive"))
     if controller is not None and options.rig_effects:
-        from harness.session import build_controller_for_rig
         from harness.twin import run_rig_twin
 
         rig_controller = build_controller_for_rig(profile, name, scale)  # the same design as the ideal case

@@ -85,16 +85,16 @@ def test_design_stiffness_scale_changes_the_controlled_result(tmp_path, capsys):
 
 def test_rig_effects_keep_the_design_stiffness_scale(tmp_path, capsys, monkeypatch):
     """--rig-effects with --design-stiffness-scale: the rig twin's controller is designed with the scale too."""
-    import harness.session as session
+    import harness.control.factory as factory
 
     scales = []
-    original = session.make_controller
+    original = factory.make_controller
 
     def spy(profile, name, design_stiffness_scale=1.0):
         scales.append(design_stiffness_scale)
         return original(profile, name, design_stiffness_scale)
 
-    monkeypatch.setattr(session, "make_controller", spy)
+    monkeypatch.setattr(factory, "make_controller", spy)
     path = tmp_path / "twin.json"
     status = main(["simulate", "--duration", "1", "--rig-effects", "--design-stiffness-scale", "0.7",
                    "--json", str(path), "--quiet"])

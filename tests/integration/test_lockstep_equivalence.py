@@ -24,7 +24,8 @@ from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig, SensorsConfig
 from harness.rig.virtual_rig import RigParts, VirtualRig
 from harness.signals import Measurements
-from harness.study import StudyOptions, make_controller, prepare_motion, run_study
+from harness.control.factory import make_controller
+from harness.study import StudyOptions, prepare_motion, run_study
 from tests.conftest import PROFILES
 
 STEP_TIMEOUT_S = 5.0

@@ -23,7 +23,7 @@ from harness.loop.tick import ControlTick
 from harness.profile import load_profile
 from harness.rig.virtual_rig import VirtualRig
 from harness.safety.supervisor import Supervisor
-from harness.session import build_controller_for_rig
+from harness.control.factory import build_controller_for_rig
 from harness.study import StudyOptions, prepare_motion
 
 RATE_HZ = 500.0

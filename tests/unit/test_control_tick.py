@@ -24,7 +24,7 @@ from harness.profile import load_profile
 from harness.safety.config import CommsConfig, SafetyConfig
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import Supervisor
-from harness.session import build_controller_for_rig
+from harness.control.factory import build_controller_for_rig
 
 PERIOD_S = 0.002
 DRIVE_READY, DRIVE_ENABLED = 1, 2

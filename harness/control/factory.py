@@ -1,0 +1,59 @@
+"""Controllers built from a profile's named designs: for simulation, and for a rig.
+
+One place builds a controller, so ``harness simulate``, the simulated twin, a dry run
+and a run on the real rig all get the same design from the same profile.
+"""
+
+from __future__ import annotations
+
+from harness.control.designs import Controller, build_controller
+from harness.errors import ProfileError
+from harness.profile import Profile
+
+
+def make_controller(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
+    """Build the named design of ``profile`` on its (possibly mis-scaled) design model.
+
+    Parameters
+    ----------
+    profile : Profile
+    name : str
+        A key of ``control.designs``.
+    design_stiffness_scale : float
+        The design model's story stiffnesses are the profile's times this (robustness studies).
+
+    Raises
+    ------
+    ProfileError
+        If the profile has no such design.
+    """
+    designs = profile.control.designs
+    if name not in designs:
+        raise ProfileError(
+            f"unknown controller {name!r}; this profile has {', '.join(designs)} (or 'none' for passive only)",
+            profile.source_path,
+            "control.designs",
+        )
+    design_building = profile.structure
+    if design_stiffness_scale != 1.0:
+        design_building = design_building.with_stiffness_scale(design_stiffness_scale)
+    return build_controller(name, designs[name], design_building)
+
+
+def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
+    """The named design (designed on story stiffnesses scaled by ``design_stiffness_scale``),
+    refused if it needs states a rig does not measure.
+
+    Raises
+    ------
+    ProfileError
+        For a full-state design: a rig measures only x_0, xdot_0, y_b and ydot_b.
+    """
+    controller = make_controller(profile, name, design_stiffness_scale)
+    if controller.needs_full_state:
+        raise ProfileError(
+            f"controller {name!r} needs the full state Z; a rig measures only x_0, xdot_0, y_b, ydot_b. "
+            "Use a phi or simple_output design on the table (full-state designs are for harness simulate)",
+            profile.source_path, "control.controller",
+        )
+    return controller
