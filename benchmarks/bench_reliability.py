@@ -106,8 +106,8 @@ def table(results: list[dict], baseline: dict, args: argparse.Namespace) -> str:
     case = f"{args.record or 'synthetic (default)'}" + (f", {args.pga} g" if args.pga else "") + (
         f", time scale {args.time_scale}" if args.time_scale else "") + f", {args.duration or 'profile'} s"
     lines = [
-        f"| case | runs completed | trip reasons | loop CPU per tick median / p99 (us, median of runs) | "
-        f"longest gap (ms) | recorder's longest lock hold (us) | bare loop p50 / p99 / max (us) |",
+        "| case | runs completed | trip reasons | loop CPU per tick median / p99 (us, median of runs) | "
+        "longest gap (ms) | recorder's longest lock hold (us) | bare loop p50 / p99 / max (us) |",
         "|---|---|---|---|---|---|---|",
         f"| {case} | {completed} / {len(results)} | {dict(reasons) or 'none'} | {cpu_med:.0f} / {cpu_p99:.0f} | "
         f"{longest:.1f} | {hold:.0f} | {baseline['p50_us']:.1f} / {baseline['p99_us']:.0f} / {baseline['max_us']:.0f} |",

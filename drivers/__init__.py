@@ -1,15 +1,29 @@
 """CAN protocol and drivers: the only part of the harness that knows CAN.
 
-- ``rig.dbc``: the protocol, one source of truth (messages, scales, ranges, E2E Data-IDs, version).
+The drivers import nothing from :mod:`harness` (``tests/unit/test_architecture.py`` checks it);
+they take plain arguments, as ``can.Bus`` does, and the harness adapts its profile to them.
+
+- ``rig.dbc``: the protocol, one source of truth (messages, scales, ranges, value tables, E2E Data-IDs, version).
+- :mod:`drivers.protocol_values`: the protocol version and the DBC's value tables as IntEnums (drive state, ...).
+- :mod:`drivers.errors`: :class:`~drivers.errors.DriverError` and its ProtocolError, BusError, BusLoadError.
 - :mod:`drivers.e2e`: CRC-8/2F and rolling counter (AUTOSAR E2E profile-2 style).
 - :mod:`drivers.codec`: the DBC compiled into fast SI encoders/decoders (:func:`~drivers.codec.load_protocol`).
 - :mod:`drivers.decoder`: the never-raising, counting :class:`~drivers.decoder.Decoder`.
-- :mod:`drivers.config`: :class:`~drivers.config.CanConfig`, the profile's ``can`` section.
+- :mod:`drivers.measurements`: :class:`~drivers.measurements.Measurements`, the decoded control sample.
 - :mod:`drivers.busload`: worst-case bus load and the refusal above the allowed share.
 - :mod:`drivers.bus`: :func:`~drivers.bus.open_bus` for any python-can interface; error-frame and send-failure accounting.
 - :mod:`drivers.reader` / :mod:`drivers.writer`: poll-in-the-tick readers and preallocated-frame writers, harness and rig side.
+- :mod:`drivers.link`: one call to a checked, open link with its reader and writer.
+- :mod:`drivers.seqpacket`: the ``seqpacket`` python-can interface (Unix SOCK_SEQPACKET hub).
+
+Importing this package stays cheap (the harness imports :mod:`drivers.errors` everywhere):
+python-can is not imported here. The ``seqpacket`` interface is registered with python-can
+by the installed entry point, by importing :mod:`drivers.seqpacket` (which
+:mod:`drivers.bus` does), and here when python-can is already loaded, so
+``import can; import drivers; can.Bus(interface="seqpacket")`` works without the entry point.
 """
 
-from drivers.seqpacket import register as _register_seqpacket
+import sys as _sys
 
-_register_seqpacket()  # can.Bus(interface="seqpacket") works before the entry point is installed
+if "can" in _sys.modules:
+    from drivers import seqpacket as _seqpacket  # noqa: F401  registers the seqpacket interface

@@ -1,4 +1,4 @@
-"""Open a python-can bus from the profile, and keep account of bus health.
+"""Open a python-can bus by interface and channel, and keep account of bus health.
 
 :func:`open_bus` works for any python-can interface (``virtual``, ``socketcan``,
 ``pcan``, ``kvaser``, ...). For socketcan it checks the kernel and the channel
@@ -20,8 +20,8 @@ from typing import Any
 
 import can
 
-from drivers.config import CanConfig
-from harness.errors import BusError
+import drivers.seqpacket  # noqa: F401  registers the seqpacket interface with python-can
+from drivers.errors import BusError
 
 SYS_NET = Path("/sys/class/net")
 WITH_VCAN_HINT = "this project's scripts/with-vcan runs the tests inside User-Mode Linux, which has SocketCAN"
@@ -104,13 +104,24 @@ def _read(path: Path) -> str:
         return "unknown"
 
 
-def open_bus(config: CanConfig, *, can_filters: Sequence[dict[str, Any]] | None = None, **kwargs: Any) -> can.BusABC:
-    """Open the python-can bus the profile names.
+def open_bus(
+    interface: str,
+    channel: str,
+    bitrate_bps: int | None = None,
+    *,
+    can_filters: Sequence[dict[str, Any]] | None = None,
+    **kwargs: Any,
+) -> can.BusABC:
+    """Open a python-can bus, as ``can.Bus(interface=..., channel=..., bitrate=...)`` does.
 
     Parameters
     ----------
-    config : CanConfig
-        ``interface``, ``channel`` and ``bitrate_bps`` are used.
+    interface : str
+        Any python-can interface name: ``virtual``, ``socketcan``, ``seqpacket``, ``pcan``, ``kvaser``, ...
+    channel : str
+        Interface channel: ``vcan0``/``can0`` for socketcan, a shared name for virtual and seqpacket.
+    bitrate_bps : int, optional
+        Nominal bitrate (bit/s), for interfaces that set it (socketcan takes it from ``ip link``).
     can_filters : sequence of dict, optional
         python-can filters (``{"can_id": .., "can_mask": ..}``); default: receive everything.
     **kwargs
@@ -126,23 +137,23 @@ def open_bus(config: CanConfig, *, can_filters: Sequence[dict[str, Any]] | None 
     BusError
         Unknown interface, missing driver library, missing or down channel; says how to fix it.
     """
-    if config.interface == "socketcan":
-        socketcan_preflight(config.channel)
+    if interface == "socketcan":
+        socketcan_preflight(channel)
     try:
         return can.Bus(
-            interface=config.interface,
-            channel=config.channel,
-            bitrate=config.bitrate_bps,
+            interface=interface,
+            channel=channel,
+            bitrate=bitrate_bps,
             can_filters=list(can_filters) if can_filters else None,
             **kwargs,
         )
     except can.CanInterfaceNotImplementedError as err:
         raise BusError(
-            f"python-can interface {config.interface!r} is not available: {err}; "
+            f"python-can interface {interface!r} is not available: {err}; "
             f"expected one of {', '.join(sorted(can.VALID_INTERFACES))} with its driver installed"
         ) from err
     except (can.CanError, OSError, ValueError) as err:
-        raise BusError(f"cannot open {config.interface} channel {config.channel!r}: {err}") from err
+        raise BusError(f"cannot open {interface} channel {channel!r}: {err}") from err
 
 
 class BusHealth:
@@ -151,7 +162,8 @@ class BusHealth:
     Attributes
     ----------
     state : can.BusState
-        ``ACTIVE``, ``PASSIVE`` (error passive) or ``ERROR`` (bus-off), from error frames.
+        ``ACTIVE``, ``PASSIVE`` (error passive) or ``ERROR`` (bus-off), from error frames;
+        ask :attr:`bus_off` and :attr:`error_passive` rather than comparing it.
     error_frames, bus_off_events, error_passive_events, error_warning_events : int
     restarts, controller_overflows, protocol_errors, ack_errors, tx_timeouts, lost_arbitration : int
     send_failures : int
@@ -190,7 +202,12 @@ class BusHealth:
     @property
     def bus_off(self) -> bool:
         """True from a bus-off error frame until a restarted/active one."""
-        return self.state == can.BusState.ERROR
+        return self.state is can.BusState.ERROR
+
+    @property
+    def error_passive(self) -> bool:
+        """True from an error-passive controller report until an error-active or restarted one (never when bus-off)."""
+        return self.state is can.BusState.PASSIVE
 
     def note_error_frame(self, msg: can.Message, now: float) -> None:
         """Classify one error frame (``msg.is_error_frame``) by its error-class bits."""

@@ -25,8 +25,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from drivers.codec import Protocol
-from drivers.config import CanConfig
-from harness.errors import BusLoadError, ProtocolError
+from drivers.errors import BusLoadError, ProtocolError
 
 STUFFABLE_HEADER_BITS_STD = 34
 STUFFABLE_HEADER_BITS_EXT = 54
@@ -108,10 +107,23 @@ def bus_load(protocol: Protocol, rates_hz: Mapping[str, float], bitrate_bps: int
     return BusLoad(int(bitrate_bps), bits)
 
 
-def check_bus_load(config: CanConfig, protocol: Protocol) -> BusLoad:
-    """Compute the load of ``config`` and refuse it when above ``config.max_bus_load``.
+def check_bus_load(
+    protocol: Protocol, rates_hz: Mapping[str, float], bitrate_bps: int, max_share: float = 0.5
+) -> BusLoad:
+    """Compute the load of the given rates and refuse it when above ``max_share`` of the bitrate.
 
     Call it before opening the bus, so nothing is sent with a refused configuration.
+
+    Parameters
+    ----------
+    protocol : Protocol
+        The compiled DBC.
+    rates_hz : mapping of str to float
+        Rate of every message of the DBC (Hz), as for :func:`bus_load`.
+    bitrate_bps : int
+        Bitrate (bit/s).
+    max_share : float
+        Largest allowed share of the bitrate (0..1).
 
     Returns
     -------
@@ -122,11 +134,13 @@ def check_bus_load(config: CanConfig, protocol: Protocol) -> BusLoad:
     ------
     BusLoadError
         With the computed share, the allowed share and the per-message breakdown.
+    ProtocolError
+        From :func:`bus_load`.
     """
-    load = bus_load(protocol, config.rates_hz(), config.bitrate_bps)
-    if load.share > config.max_bus_load:
+    load = bus_load(protocol, rates_hz, bitrate_bps)
+    if load.share > max_share:
         raise BusLoadError(
-            f"bus load {load.share:.1%} exceeds the allowed {config.max_bus_load:.1%}: "
+            f"bus load {load.share:.1%} exceeds the allowed {max_share:.1%}: "
             f"{load.describe()}; lower the rates or raise can.bitrate_bps"
         )
     return load

@@ -23,7 +23,8 @@ from pathlib import Path
 import cantools
 
 from drivers.e2e import parse_data_ids, profile2_crc, protect
-from harness.errors import ProtocolError
+from drivers.errors import ProtocolError
+from drivers.protocol_values import VALUE_TABLES, choices_of
 
 #: The packaged protocol description.
 DEFAULT_DBC = Path(__file__).with_name("rig.dbc")
@@ -253,6 +254,37 @@ class Protocol:
                 raise ProtocolError(f"{path}: {err}") from err
             self.messages[message.name] = MessageCodec(message, data_ids)
         self.by_id: dict[int, MessageCodec] = {m.frame_id: m for m in self.messages.values()}
+        self._check_value_tables()
+
+    def value_table(self, message: str, signal: str) -> dict[int, str]:
+        """The DBC's ``VAL_`` table of ``message.signal`` as ``{raw value: name}`` (empty if it has none).
+
+        Raises
+        ------
+        ProtocolError
+            If the message or signal does not exist.
+        """
+        self[message].index(signal)
+        choices: Mapping[int, object] = self.database.get_message_by_name(message).get_signal_by_name(signal).choices or {}
+        return {int(value): str(name) for value, name in choices.items()}
+
+    def _check_value_tables(self) -> None:
+        """Refuse a DBC whose value table of a named signal differs from the drivers' enum.
+
+        A DBC without the message, the signal or a value table for it is accepted as before;
+        one that names the values must name them as :data:`drivers.protocol_values.VALUE_TABLES` does.
+        """
+        for (message, signal), enum in VALUE_TABLES.items():
+            codec = self.messages.get(message)
+            if codec is None or signal not in codec.signal_names:
+                continue
+            found = self.value_table(message, signal)
+            expected = choices_of(enum)
+            if found and found != expected:
+                raise ProtocolError(
+                    f"{self.path}: VAL_ table of {message}.{signal} is {_describe(found)}; "
+                    f"expected {_describe(expected)} (drivers.protocol_values.{enum.__name__})"
+                )
 
     def choice(self, message: str, signal: str, label: str) -> int:
         """The raw value of a named choice from the DBC's ``VAL_`` table (look it up once).
@@ -264,13 +296,12 @@ class Protocol:
         ProtocolError
             If the message, signal or label does not exist.
         """
-        self[message].index(signal)
-        choices = self.database.get_message_by_name(message).get_signal_by_name(signal).choices or {}
+        choices = self.value_table(message, signal)
         for value, name in choices.items():
-            if str(name) == label:
-                return int(value)
+            if name == label:
+                return value
         raise ProtocolError(
-            f"{message}.{signal} has no choice {label!r}; expected one of: {', '.join(str(n) for n in choices.values()) or 'none'}"
+            f"{message}.{signal} has no choice {label!r}; expected one of: {', '.join(choices.values()) or 'none'}"
         )
 
     def __getitem__(self, name: str) -> MessageCodec:
@@ -278,6 +309,11 @@ class Protocol:
             return self.messages[name]
         except KeyError as err:
             raise ProtocolError(f"no message {name!r} in {self.path.name}; expected one of: {', '.join(self.messages)}") from err
+
+
+def _describe(choices: Mapping[int, str]) -> str:
+    """``0 "OFF" 1 "READY" ...``, a value table as the DBC writes it."""
+    return " ".join(f'{value} "{name}"' for value, name in sorted(choices.items()))
 
 
 def load_protocol(path: str | Path | None = None) -> Protocol:
@@ -291,7 +327,8 @@ def load_protocol(path: str | Path | None = None) -> Protocol:
     Raises
     ------
     ProtocolError
-        If the file is missing, does not parse, or breaks the protocol's conventions.
+        If the file is missing, does not parse, or breaks the protocol's conventions (a value
+        table that names a signal's values otherwise than :mod:`drivers.protocol_values` included).
     """
     dbc = Path(path) if path else DEFAULT_DBC
     text = _read_dbc_text(dbc)

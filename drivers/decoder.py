@@ -15,7 +15,7 @@ from enum import IntEnum
 
 from drivers.codec import MessageCodec, Protocol
 from drivers.e2e import CounterCheck, profile2_crc
-from harness.errors import ProtocolError
+from drivers.errors import ProtocolError
 
 
 class RxStatus(IntEnum):

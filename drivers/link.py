@@ -1,15 +1,21 @@
-"""One call from a ``CanConfig`` to a checked, open CAN link with its reader and writer.
+"""One call from plain settings to a checked, open CAN link with its reader and writer.
 
 :func:`prepare` does everything that can refuse a configuration before the bus is
 opened (so nothing is ever sent with a refused configuration): load and compile
-the DBC, check its protocol version against the profile, check the bus load.
+the DBC, check its protocol version against the expected one, check the bus load.
 :func:`open_harness` and :func:`open_rig` then open the bus and build the side's
 reader and writer around one shared :class:`~drivers.bus.BusHealth`.
+
+Like ``can.Bus``, these take plain arguments (interface, channel, bitrate, rates as a
+mapping, DBC path); the harness adapts its profile's ``can`` section to them
+(:mod:`harness.can_link`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from types import TracebackType
 
 import can
@@ -17,24 +23,44 @@ import can
 from drivers.bus import BusHealth, open_bus
 from drivers.busload import BusLoad, check_bus_load
 from drivers.codec import Protocol, check_protocol_version, load_protocol
-from drivers.config import CanConfig
+from drivers.protocol_values import CURRENT_PROTOCOL_VERSION
 from drivers.reader import HarnessReader, RigReader
 from drivers.writer import HarnessWriter, RigWriter
 
 
-def prepare(config: CanConfig) -> tuple[Protocol, BusLoad]:
+def prepare(
+    rates_hz: Mapping[str, float],
+    bitrate_bps: int,
+    *,
+    max_bus_load: float = 0.5,
+    protocol_version: int = CURRENT_PROTOCOL_VERSION,
+    dbc_path: str | Path | None = None,
+) -> tuple[Protocol, BusLoad]:
     """Load the DBC and check version and bus load, without touching the bus.
+
+    Parameters
+    ----------
+    rates_hz : mapping of str to float
+        Rate of every message of the DBC (Hz).
+    bitrate_bps : int
+        Bitrate (bit/s).
+    max_bus_load : float
+        Largest allowed share of the bitrate (0..1).
+    protocol_version : int
+        The ``ProtocolVersion`` the DBC must have.
+    dbc_path : str or Path, optional
+        The DBC; None or empty means the packaged ``drivers/rig.dbc``.
 
     Raises
     ------
     ProtocolError
-        The DBC is unreadable or its ProtocolVersion differs from ``config.protocol_version``.
+        The DBC is unreadable or its ProtocolVersion differs from ``protocol_version``.
     BusLoadError
-        The configured rates need more than ``config.max_bus_load`` of the bitrate.
+        The rates need more than ``max_bus_load`` of the bitrate.
     """
-    protocol = load_protocol(config.dbc_path or None)
-    check_protocol_version(protocol, config.protocol_version)
-    load = check_bus_load(config, protocol)
+    protocol = load_protocol(dbc_path or None)
+    check_protocol_version(protocol, protocol_version)
+    load = check_bus_load(protocol, rates_hz, bitrate_bps, max_bus_load)
     return protocol, load
 
 
@@ -80,8 +106,30 @@ class RigLink(_Link):
         return self
 
 
-def open_harness(config: CanConfig) -> HarnessLink:
-    """Check the configuration, then open the bus for the harness side.
+def open_harness(
+    interface: str,
+    channel: str,
+    bitrate_bps: int,
+    rates_hz: Mapping[str, float],
+    *,
+    max_bus_load: float = 0.5,
+    protocol_version: int = CURRENT_PROTOCOL_VERSION,
+    dbc_path: str | Path | None = None,
+    use_msg_timestamp: bool = False,
+    max_frames_per_poll: int = 256,
+) -> HarnessLink:
+    """Check the settings, then open the bus for the harness side.
+
+    Parameters
+    ----------
+    interface, channel : str
+        The python-can interface and channel (see :func:`drivers.bus.open_bus`).
+    bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path
+        As for :func:`prepare`.
+    use_msg_timestamp : bool
+        The reader takes a frame's receive time from ``msg.timestamp`` instead of ``poll``'s ``now``.
+    max_frames_per_poll : int
+        Most frames one ``poll`` of the reader handles.
 
     Raises
     ------
@@ -90,17 +138,32 @@ def open_harness(config: CanConfig) -> HarnessLink:
     BusError
         The bus cannot be opened (says how to fix it).
     """
-    protocol, load = prepare(config)
-    bus = open_bus(config)
-    health = BusHealth()
-    return HarnessLink(
-        bus, protocol, load, health, HarnessReader(bus, protocol, config, health), HarnessWriter(bus, protocol, health)
+    protocol, load = prepare(
+        rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path
     )
-
-
-def open_rig(config: CanConfig) -> RigLink:
-    """Check the configuration, then open the bus for the rig side (the virtual rig)."""
-    protocol, load = prepare(config)
-    bus = open_bus(config)
+    bus = open_bus(interface, channel, bitrate_bps)
     health = BusHealth()
-    return RigLink(bus, protocol, load, health, RigReader(bus, protocol, config, health), RigWriter(bus, protocol, health))
+    reader = HarnessReader(bus, protocol, health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames_per_poll)
+    return HarnessLink(bus, protocol, load, health, reader, HarnessWriter(bus, protocol, health))
+
+
+def open_rig(
+    interface: str,
+    channel: str,
+    bitrate_bps: int,
+    rates_hz: Mapping[str, float],
+    *,
+    max_bus_load: float = 0.5,
+    protocol_version: int = CURRENT_PROTOCOL_VERSION,
+    dbc_path: str | Path | None = None,
+    use_msg_timestamp: bool = False,
+    max_frames_per_poll: int = 256,
+) -> RigLink:
+    """Check the settings, then open the bus for the rig side (the virtual rig); parameters as :func:`open_harness`."""
+    protocol, load = prepare(
+        rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path
+    )
+    bus = open_bus(interface, channel, bitrate_bps)
+    health = BusHealth()
+    reader = RigReader(bus, protocol, health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames_per_poll)
+    return RigLink(bus, protocol, load, health, reader, RigWriter(bus, protocol, health))

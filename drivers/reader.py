@@ -32,21 +32,23 @@ import can
 from drivers.bus import BusHealth
 from drivers.codec import Protocol
 from drivers.decoder import Decoder, RxStatus
-from drivers.config import CanConfig
-from harness.errors import BusError, ProtocolError
-from harness.signals import Measurements
+from drivers.errors import BusError, ProtocolError
+from drivers.measurements import Measurements
+from drivers.protocol_values import DriveState, EstopSource
 
 #: What the harness receives (sensors, actuator status, rig status, E-stop).
 HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
 #: What the rig (servo controller and virtual rig) receives.
 RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP")
 ESTOP_MESSAGE = "ESTOP"
-#: ESTOP ``source`` of the operator panel (DBC: 0 harness, 1 rig, 2 servo, 3 panel, 4 supervisor).
-PANEL_SOURCE = 3
+#: ESTOP ``source`` of the operator panel (the DBC's value table, :class:`~drivers.protocol_values.EstopSource`).
+PANEL_SOURCE = EstopSource.PANEL
 #: How far in the future a frame's timestamp may lie before it is taken for another clock (s).
 FUTURE_TOLERANCE_S = 0.001
 #: Messages carrying the controller's measurements (x_0, xdot_0, y_b, ydot_b).
 CONTROL_MEASUREMENTS = ("TABLE_SENSORS", "BASE_SENSORS")
+#: Drive states in which the drive can apply force when enabled.
+_DRIVE_READY_STATES = frozenset({DriveState.READY, DriveState.ENABLED})
 
 
 class Sample:
@@ -364,16 +366,21 @@ class HarnessReader(FrameReader):
     ----------
     bus : can.BusABC
     protocol : Protocol
-    config : CanConfig
-        ``timestamp_source`` and ``max_frames_per_poll`` are used.
     health : BusHealth, optional
+        Shared with the writer; a new one by default.
+    use_msg_timestamp : bool
+        Take the receive time from ``msg.timestamp`` (moved onto the loop's clock) instead of ``now``.
+    max_frames : int
+        Most frames one :meth:`poll` handles.
     """
 
-    def __init__(self, bus: can.BusABC, protocol: Protocol, config: CanConfig, health: BusHealth | None = None):
+    def __init__(
+        self, bus: can.BusABC, protocol: Protocol, health: BusHealth | None = None, *,
+        use_msg_timestamp: bool = False, max_frames: int = 256,
+    ):
         super().__init__(
             bus, protocol, HARNESS_RX, foreign=("ACTUATOR_CMD",), health=health,
-            use_msg_timestamp=config.timestamp_source == "message", max_frames=config.max_frames_per_poll,
-            poison_on_invalid=CONTROL_MEASUREMENTS,
+            use_msg_timestamp=use_msg_timestamp, max_frames=max_frames, poison_on_invalid=CONTROL_MEASUREMENTS,
         )
         self.table = self.sample("TABLE_SENSORS")
         self.base = self.sample("BASE_SENSORS")
@@ -386,8 +393,18 @@ class HarnessReader(FrameReader):
 
     @property
     def drive_state(self) -> int:
-        """Latest ACTUATOR_STATUS drive state (0 off, 1 ready, 2 enabled, 3 fault, 4 estop; 0 before any frame)."""
+        """Latest ACTUATOR_STATUS drive state, a :class:`~drivers.protocol_values.DriveState` value (``OFF`` before any frame)."""
         return int(self.status.values[self._drive])
+
+    @property
+    def drive_ready(self) -> bool:
+        """The drive is ``READY`` or ``ENABLED`` (latest ACTUATOR_STATUS)."""
+        return self.status.values[self._drive] in _DRIVE_READY_STATES
+
+    @property
+    def drive_fault(self) -> bool:
+        """The drive is in ``FAULT`` (latest ACTUATOR_STATUS)."""
+        return self.status.values[self._drive] == DriveState.FAULT
 
     @property
     def pressure_ok(self) -> bool:
@@ -396,7 +413,7 @@ class HarnessReader(FrameReader):
 
     @property
     def fault_code(self) -> int:
-        """Latest servo fault code (0 none)."""
+        """Latest servo fault code, a :class:`~drivers.protocol_values.FaultCode` value or any injected code (0 none)."""
         return int(self.status.values[self._fault])
 
     @property
@@ -415,12 +432,17 @@ class HarnessReader(FrameReader):
 
 
 class RigReader(FrameReader):
-    """The rig side (virtual rig, servo controller): commands, heartbeat, rig control, E-stop."""
+    """The rig side (virtual rig, servo controller): commands, heartbeat, rig control, E-stop.
 
-    def __init__(self, bus: can.BusABC, protocol: Protocol, config: CanConfig, health: BusHealth | None = None):
+    Parameters are those of :class:`HarnessReader`.
+    """
+
+    def __init__(
+        self, bus: can.BusABC, protocol: Protocol, health: BusHealth | None = None, *,
+        use_msg_timestamp: bool = False, max_frames: int = 256,
+    ):
         super().__init__(
-            bus, protocol, RIG_RX, health=health,
-            use_msg_timestamp=config.timestamp_source == "message", max_frames=config.max_frames_per_poll,
+            bus, protocol, RIG_RX, health=health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames,
         )
         self.command = self.sample("ACTUATOR_CMD")
         self.heartbeat = self.sample("HEARTBEAT")

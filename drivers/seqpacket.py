@@ -82,7 +82,7 @@ from typing import Any
 import can
 from can import BusABC, CanOperationError, CanProtocol, Message
 
-from harness.errors import BusError
+from drivers.errors import BusError
 
 LOG = logging.getLogger(__name__)
 
@@ -769,3 +769,5 @@ class _DirectoryLock:
 
 
 __all__ = ["SeqPacketBus", "parse_channel", "register", "encode_frame", "decode_frame", "INTERFACE"]
+
+register()  # importing this module makes can.Bus(interface="seqpacket") work, entry point or not

@@ -20,7 +20,8 @@ import can
 from drivers.bus import BusHealth
 from drivers.codec import MessageCodec, Protocol
 from drivers.e2e import COUNTER_MODULO
-from harness.errors import ProtocolError
+from drivers.errors import ProtocolError
+from drivers.protocol_values import EstopSource
 
 #: What the harness sends.
 HARNESS_TX = ("ACTUATOR_CMD", "HEARTBEAT", "ESTOP", "RIG_CONTROL")
@@ -147,18 +148,18 @@ class HarnessWriter(FrameWriter):
         return self.send_frame(self._cmd, values, now)
 
     def heartbeat(self, state: int, now: float) -> bool:
-        """Send HEARTBEAT with the harness lifecycle ``state`` (0..15)."""
+        """Send HEARTBEAT with the harness lifecycle ``state`` (0..15; the DBC's value table names 0..5)."""
         self._hb_values[0] = state
         return self.send_frame(self._hb, self._hb_values, now)
 
-    def estop(self, active: bool, now: float, source: int = 0, reason: int = 0) -> bool:
-        """Send ESTOP (``source`` 0 harness ... 4 supervisor, ``reason`` 0..255); repeat while active."""
+    def estop(self, active: bool, now: float, source: int = EstopSource.HARNESS, reason: int = 0) -> bool:
+        """Send ESTOP (``source`` an :class:`~drivers.protocol_values.EstopSource`, ``reason`` 0..255); repeat while active."""
         values = self._estop_values
         values[0], values[1], values[2] = (1.0 if active else 0.0), source, reason
         return self.send_frame(self._estop, values, now)
 
     def rig_control(self, command: int, lockstep: bool, now: float, fault_id: int = 0, fault_param: float = 0.0) -> bool:
-        """Send RIG_CONTROL (command 0 none, 1 start table, 2 stop table, 3 reset; fault injection)."""
+        """Send RIG_CONTROL: ``command`` a :class:`~drivers.protocol_values.RigCommand`, the lockstep flag, fault injection."""
         values = self._ctrl_values
         values[0], values[1], values[2], values[3] = command, (1.0 if lockstep else 0.0), fault_id, fault_param
         return self.send_frame(self._ctrl, values, now)
@@ -201,12 +202,13 @@ class RigWriter(FrameWriter):
         """Send FLOOR_ACCELS: absolute accelerations of floors 1-3 (m/s^2)."""
         return self._send3(self._accels, a1, a2, a3, now)
 
-    def estop(self, active: bool, now: float, source: int = 1, reason: int = 0) -> bool:
-        """Send ESTOP from the rig (``source`` 1 rig, 2 servo)."""
+    def estop(self, active: bool, now: float, source: int = EstopSource.RIG, reason: int = 0) -> bool:
+        """Send ESTOP from the rig (``source`` ``EstopSource.RIG`` or ``EstopSource.SERVO``)."""
         return self._send3(self._estop, 1.0 if active else 0.0, source, reason, now)
 
     def actuator_status(self, force_n: float, drive_state: int, pressure_ok: bool, fault_code: int, now: float) -> bool:
-        """Send ACTUATOR_STATUS: drive state (0 off, 1 ready, 2 enabled, 3 fault, 4 estop), pressure ok, fault, force (N)."""
+        """Send ACTUATOR_STATUS: ``drive_state`` (:class:`~drivers.protocol_values.DriveState`), pressure ok,
+        ``fault_code`` (:class:`~drivers.protocol_values.FaultCode` or an injected code), force (N)."""
         values = self._v4
         values[0], values[1], values[2], values[3] = drive_state, (1.0 if pressure_ok else 0.0), fault_code, force_n
         return self.send_frame(self._status, values, now)

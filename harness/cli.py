@@ -15,7 +15,7 @@ from rich.markup import escape
 from harness import exit_codes
 from harness.commands import COMMANDS
 from harness.commands.options import EPILOG, wrap
-from harness.errors import HarnessError
+from harness.errors import EXPECTED_ERRORS
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -49,7 +49,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler: Callable[[argparse.Namespace, Console], int] = args.handler
     try:
         return handler(args, console)
-    except HarnessError as err:
+    except EXPECTED_ERRORS as err:
         Console(stderr=True, soft_wrap=True).print(f"[bold red]error:[/] {escape(str(err))}", highlight=False)
         return exit_codes.INPUT_ERROR
     except KeyboardInterrupt:

@@ -3,13 +3,36 @@
 Every error the harness raises on purpose derives from :class:`HarnessError` and
 from the builtin that fits it, so callers can catch either. Messages say what was
 expected and what was found.
+
+The CAN drivers have their own tree (:mod:`drivers.errors`: :class:`DriverError`,
+:class:`ProtocolError`, :class:`BusError`, :class:`BusLoadError`), because the drivers
+import nothing from the harness. This module re-exports those classes, so
+``from harness.errors import BusError`` names the very class the drivers raise, and
+:data:`EXPECTED_ERRORS` names both roots for the places that handle any expected
+error (the command line's exit status 2, the tick's "bus gone").
+
+Why a tuple and not one root: ``except`` matches on the real class hierarchy only
+(``abc.ABCMeta.register`` makes ``isinstance`` true, but an ``except HarnessError``
+clause still lets a registered class through), and a driver error cannot derive from
+:class:`HarnessError` without the drivers importing the harness.
 """
 
 from __future__ import annotations
 
+from drivers.errors import BusError, BusLoadError, DriverError, ProtocolError
+
+__all__ = [
+    "EXPECTED_ERRORS", "BusError", "BusLoadError", "DriverError", "HarnessError", "ModelError", "ProfileError",
+    "ProtocolError", "RecordError", "SafetyError", "TripError",
+]
+
 
 class HarnessError(Exception):
-    """Base of every error the harness raises on purpose."""
+    """Base of every error the harness raises on purpose (the drivers' errors excepted, see the module)."""
+
+
+#: Every error raised on purpose, by the harness or by its CAN drivers: ``except EXPECTED_ERRORS``.
+EXPECTED_ERRORS: tuple[type[Exception], ...] = (HarnessError, DriverError)
 
 
 class ProfileError(HarnessError, ValueError):
@@ -43,18 +66,6 @@ class RecordError(HarnessError, ValueError):
 
 class ModelError(HarnessError, ValueError):
     """A structural model or controller design is inconsistent (e.g. unstable surface)."""
-
-
-class ProtocolError(HarnessError, ValueError):
-    """A CAN frame or DBC does not match what the protocol expects."""
-
-
-class BusError(HarnessError, OSError):
-    """A CAN bus cannot be opened, used, or has failed."""
-
-
-class BusLoadError(HarnessError, ValueError):
-    """The configured messages and rates need more of the bitrate than allowed."""
 
 
 class SafetyError(HarnessError, RuntimeError):

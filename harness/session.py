@@ -13,14 +13,13 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from drivers.config import CanConfig
-from drivers.link import open_harness
+from harness.can_config import CanConfig
 from harness import exit_codes
+from harness.can_link import open_harness
 from harness.console import LiveConsole
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.errors import ProfileError
-from harness.loop.row import COLUMNS, N_STORIES
 from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
 from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult, LoopStatus
 from harness.loop.table_link import CanTableLink
@@ -29,6 +28,7 @@ from harness.model.warmup import warm_up
 from harness.peaks import peak_responses
 from harness.profile import Profile
 from harness.record import RunFolder, load_run
+from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
 from harness.safety.weakening import summary
@@ -185,8 +185,8 @@ def run_session(
     HostTimingRefused
         In real time, when the host cannot hold the stall budget (nothing was moved).
     """
-    if profile.structure.n_stories != N_STORIES:
-        raise ProfileError(f"the CAN protocol carries {N_STORIES} stories; this profile has {profile.structure.n_stories}",
+    if profile.structure.n_stories != PROTOCOL_STORIES:
+        raise ProfileError(f"the CAN protocol carries {PROTOCOL_STORIES} stories; this profile has {profile.structure.n_stories}",
                            profile.source_path, "structure")
     warm_up()  # the estimator's kernel must not compile inside the first tick
     controller = build_controller_for_rig(profile, settings.controller)
@@ -198,7 +198,7 @@ def run_session(
     folder = None
     try:
         folder = RunFolder.create(
-            settings.log_dir, profile.name, settings.kind, profile.resolved_data(), COLUMNS,
+            settings.log_dir, profile.name, settings.kind, profile.resolved_data(), CONTROL_ROW,
             metadata=_metadata(profile, settings),
         ).start()
         heartbeat_every = max(1, round(settings.rate_hz / settings.can.heartbeat_rate_hz))

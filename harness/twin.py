@@ -13,9 +13,11 @@ statistics, and what a lab engineer checks an experiment design against.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import numpy as np
 
+from harness import rowlayout as layout
 from harness.control.estimator import FrictionEstimator
 from harness.peaks import peak_responses
 from harness.profile import Profile
@@ -24,10 +26,18 @@ from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
 from harness.rig.table import TablePlant
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
-from harness.safety.supervisor import Supervisor
-from harness.simulation import CaseResult
+from harness.safety.supervisor import SupervisedCommand, Supervisor
+from harness.sampled_case import CaseResult, CaseSamples, case_result
 
 _MAX_SENSOR_DELAY_S = 1.0
+
+#: The sensor messages, by their place in :data:`harness.rig.sensors.MESSAGE_COLUMNS`.
+_TABLE_MESSAGE, _BASE_MESSAGE, _DRIFT_MESSAGE, _ACCEL_MESSAGE = range(len(MESSAGE_COLUMNS))
+#: What the twin records per sample: every sensor reading (the rig's ring order is
+#: :data:`harness.rowlayout.SENSOR_COLUMNS`'s) and the control.
+_RECORDED = (*layout.SENSOR_COLUMNS, *layout.TWIN_CONTROL)
+#: Repeated over the row after the last sample: everything sampled; the actuator force is the one acting then.
+_HELD = tuple(name for name in _RECORDED if name != layout.FORCE_MEASURED)
 
 
 def run_rig_twin(
@@ -63,53 +73,112 @@ def run_rig_twin(
     Returns
     -------
     CaseResult
-        Columns as a dry run records them: measured signals (with the sensors' noise,
-        quantization and delay, story signals held between their samples), the supervised
-        command ``force_command_N`` and the actuator force ``force_measured_N``; peaks of
-        those; ``extra["outcome"]``, ``extra["trip_reason"]`` and the true responses
+        Columns :data:`harness.rowlayout.TWIN_COLUMNS`, as a dry run records them: measured
+        signals (with the sensors' noise, quantization and delay, story signals held between
+        their samples), the plant's true bearing state, the supervised command
+        ``force_command_N`` and the actuator force ``force_measured_N``; peaks of those;
+        ``extra["outcome"]``, ``extra["trip_reason"]`` and the true responses
         (``extra["true_peaks"]``).
     """
     started = time.perf_counter()
-    rig = profile.rig
-    h = rig.physics_substep_s
     period = 1.0 / rate_hz
-    n_sub = int(round(period / h))
-    table = TablePlant(profile.structure, profile.bearing, motion, profile.simulation.rtol)
-    rng = np.random.default_rng(rig.seed if seed is None else seed)
-    sensors = SensorModel(rig.sensors, h, _MAX_SENSOR_DELAY_S, rng)
-    sensors.set_delays(asynchronous_delay_s, n_sub if lockstep else None)
-    actuator = ServoActuator(rig.actuator, h, rig.drive.decay_time_constant_s)
+    rig = _TwinRig(profile, motion, period, seed, asynchronous_delay_s, lockstep)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
     supervisor = Supervisor(profile.safety, period_s=period)
     health = TickHealth()
-    meas = health.meas
-    truth = np.zeros(len(SIGNALS))
-    table.truth(truth, 0.0)
-    sensors.reset(truth)
-    table.start()
+    rig.start()
     controller.reset()
     supervisor.arm(0.0, health)
     supervisor.start(0.0)
     span_s = motion.duration_s if duration_s is None else min(duration_s, motion.duration_s)
-    n_samples = int(round(span_s * rate_hz))
-    states = np.zeros((n_samples + 1, table.y.size))
-    applied, raw_force, command_force = (np.zeros(n_samples + 1) for _ in range(3))
-    sliding_variable, friction_estimate = np.zeros(n_samples + 1), np.zeros(n_samples + 1)
-    measured = np.zeros((n_samples + 1, 12))  # x0 xd0 xdd0 yb ydb yddb d1 d2 d3 a1 a2 a3, as received
-    table_read, base_read, drift_read, accel_read = [0.0] * 3, [0.0] * 3, [0.0] * 3, [0.0] * 3
+    samples = CaseSamples(int(round(span_s * rate_hz)), rig.table.y.size, _RECORDED)
     story_every = max(1, int(round(rate_hz / (story_rate_hz or profile.can.story_sensor_rate_hz))))
-    steps = 0
-    for k in range(n_samples):
+    samples.run(rig.table, _twin_sample(rig, controller, estimator, supervisor, health, samples.values, period, story_every))
+    samples.close(rig.table.y, ending={layout.FORCE_MEASURED: rig.actuator.force_N}, held=_HELD)
+    return _twin_result(rig, samples, period, supervisor, profile.structure.total_weight_N, started)
+
+
+class _TwinRig:
+    """The virtual rig's models without a bus or a clock: table and plant, sensors, servo actuator.
+
+    Parameters
+    ----------
+    profile : Profile
+    motion : GroundMotion
+    period_s : float
+        Controller sample period (s), a whole number of physics sub-steps.
+    seed : int or None
+        Noise seed (None: ``rig.seed``).
+    asynchronous_delay_s : float
+        Extra delay of every sensor (s).
+    lockstep : bool
+        Round sensor delays to whole controller steps.
+    """
+
+    def __init__(self, profile: Profile, motion, period_s: float, seed: int | None, asynchronous_delay_s: float,
+                 lockstep: bool):
+        rig = profile.rig
+        self.substep_s = rig.physics_substep_s
+        self.substeps_per_sample = int(round(period_s / self.substep_s))
+        self.table = TablePlant(profile.structure, profile.bearing, motion, profile.simulation.rtol)
+        rng = np.random.default_rng(rig.seed if seed is None else seed)
+        self.sensors = SensorModel(rig.sensors, self.substep_s, _MAX_SENSOR_DELAY_S, rng)
+        self.sensors.set_delays(asynchronous_delay_s, self.substeps_per_sample if lockstep else None)
+        self.actuator = ServoActuator(rig.actuator, self.substep_s, rig.drive.decay_time_constant_s)
+        self.truth = np.zeros(len(SIGNALS))
+        #: The latest reading of each sensor message (SI, DBC signal order); story readings hold between their samples.
+        self.readings = tuple([0.0] * len(columns) for columns in MESSAGE_COLUMNS)
+        #: Physics sub-steps taken.
+        self.substeps = 0
+
+    def start(self) -> None:
+        """The rig at rest with every sensor's history filled, the table playing the record."""
+        self.table.truth(self.truth, 0.0)
+        self.sensors.reset(self.truth)
+        self.table.start()
+
+    def read(self, stories: bool) -> None:
+        """Read the table and base-mat messages, and the story messages when ``stories``, into :attr:`readings`."""
+        messages = (_TABLE_MESSAGE, _BASE_MESSAGE, _DRIFT_MESSAGE, _ACCEL_MESSAGE) if stories else (_TABLE_MESSAGE, _BASE_MESSAGE)
+        for message in messages:
+            self.sensors.read(MESSAGE_COLUMNS[message], self.readings[message])
+
+    def advance(self, t: float, command: SupervisedCommand) -> None:
+        """Advance actuator, plant and sensors over one sample from ``t`` (s), sub-step by sub-step."""
+        h, actuator, table, sensors, truth = self.substep_s, self.actuator, self.table, self.sensors, self.truth
+        for j in range(self.substeps_per_sample):
+            force = actuator.substep(command.force_N, command.enable)
+            table.advance(t + j * h, h, force)
+            table.truth(truth, force)
+            sensors.push(truth)
+        self.substeps += self.substeps_per_sample
+
+
+def _twin_sample(
+    rig: _TwinRig, controller, estimator: FrictionEstimator, supervisor: Supervisor, health: TickHealth,
+    values: dict[str, np.ndarray], period: float, story_every: int,
+) -> Callable[[int], bool]:
+    """One controller sample of the twin: read the sensors, estimate, control, supervise, record, advance.
+
+    The returned ``sample(k)`` is False when the supervisor tripped (the case ends there).
+    """
+    meas, actuator = health.meas, rig.actuator
+    table_read, base_read = rig.readings[_TABLE_MESSAGE], rig.readings[_BASE_MESSAGE]
+    reading_slots = tuple(  # (column array, message reading, position in it) of every sensor reading
+        (values[layout.SENSOR_COLUMNS[column]], rig.readings[message], i)
+        for message, columns in enumerate(MESSAGE_COLUMNS)
+        for i, column in enumerate(columns)
+    )
+    sliding_variable, friction_estimate = values[layout.SLIDING_VARIABLE], values[layout.FRICTION_ESTIMATE]
+    raw_force, command_force = values[layout.FORCE_RAW], values[layout.FORCE_COMMAND]
+    actuator_force = values[layout.FORCE_MEASURED]
+
+    def sample(k: int) -> bool:
         t = k * period
-        states[k] = table.y
-        applied[k] = actuator.force_N
-        sensors.read(MESSAGE_COLUMNS[0], table_read)
-        sensors.read(MESSAGE_COLUMNS[1], base_read)
-        if k % story_every == 0:
-            sensors.read(MESSAGE_COLUMNS[2], drift_read)
-            sensors.read(MESSAGE_COLUMNS[3], accel_read)
-        measured[k, 0:3], measured[k, 3:6] = table_read, base_read
-        measured[k, 6:9], measured[k, 9:12] = drift_read, accel_read
+        actuator_force[k] = actuator.force_N
+        rig.read(stories=k % story_every == 0)
+        for column, reading, i in reading_slots:
+            column[k] = reading[i]
         meas.set(table_read[0], table_read[1], base_read[0], base_read[1])
         health.measured_force_N = actuator.force_N
         friction = estimator.update(t, period, meas.sliding_velocity_m_s)
@@ -118,52 +187,34 @@ def run_rig_twin(
         raw_force[k], command_force[k] = raw, command.force_N
         sliding_variable[k], friction_estimate[k] = controller.sliding_variable, friction
         if supervisor.state is State.TRIPPED:
-            n_samples = k + 1
-            break
-        for j in range(n_sub):
-            force = actuator.substep(command.force_N, command.enable)
-            table.advance(t + j * h, h, force)
-            table.truth(truth, force)
-            sensors.push(truth)
-            steps += 1
-    states[n_samples] = table.y
-    applied[n_samples] = actuator.force_N
-    measured[n_samples] = measured[n_samples - 1]
-    raw_force[n_samples], command_force[n_samples] = raw_force[n_samples - 1], command_force[n_samples - 1]
-    sliding_variable[n_samples], friction_estimate[n_samples] = sliding_variable[n_samples - 1], friction_estimate[n_samples - 1]
-    end = n_samples + 1
-    times = np.arange(end) * period
-    true_columns = table.record.responses(times, states[:end], applied[:end])
-    columns = _measured_columns(times, measured[:end])
-    columns["friction_force_N"] = true_columns["friction_force_N"]
-    columns["hysteretic_nu"] = true_columns["hysteretic_nu"]
-    columns["sliding_variable_m_s"] = sliding_variable[:end]
-    columns["friction_estimate_N"] = friction_estimate[:end]
-    columns["force_raw_N"] = raw_force[:end]
-    columns["force_command_N"] = command_force[:end]
-    columns["force_measured_N"] = applied[:end]
-    peaks = peak_responses(columns, profile.structure.total_weight_N)
+            return False
+        rig.advance(t, command)
+        return True
+
+    return sample
+
+
+def _twin_result(
+    rig: _TwinRig, samples: CaseSamples, period: float, supervisor: Supervisor, total_weight_N: float, started_s: float,
+) -> CaseResult:
+    """The twin's :class:`CaseResult`: measured columns, the plant's true bearing state, the control; true peaks."""
+    rows = samples.rows
+    times = np.arange(rows) * period
+    plant = rig.table.record
+    true_columns = plant.responses(times, samples.states[:rows], samples.values[layout.FORCE_MEASURED][:rows])
+    columns = _measured_columns(times, samples)
+    columns.update({name: true_columns[name] for name in layout.BEARING})
+    columns.update(samples.columns(layout.TWIN_CONTROL))
     extra = {"outcome": "tripped" if supervisor.state is State.TRIPPED else "completed",
              "trip_reason": supervisor.command.trip_reason,
-             "true_peaks": peak_responses(true_columns, profile.structure.total_weight_N)}
-    return CaseResult("rig twin", columns, peaks, table.record.steps + steps, time.perf_counter() - started, extra)
+             "true_peaks": peak_responses(true_columns, total_weight_N)}
+    return case_result("rig twin", columns, total_weight_N, plant.steps + rig.substeps, started_s, extra)
 
 
-def _measured_columns(times: np.ndarray, measured: np.ndarray) -> dict[str, np.ndarray]:
-    """Canonical columns from the sensor readings, as the loop records a dry run."""
-    columns = {
-        "t_s": times,
-        "table_displacement_m": measured[:, 0],
-        "table_velocity_m_s": measured[:, 1],
-        "table_acceleration_m_s2": measured[:, 2],
-        "base_displacement_m": measured[:, 3],
-        "base_velocity_m_s": measured[:, 4],
-        "base_acceleration_m_s2": measured[:, 5],
-        "sliding_displacement_m": measured[:, 3] - measured[:, 0],
-        "sliding_velocity_m_s": measured[:, 4] - measured[:, 1],
-    }
-    for j in range(3):
-        columns[f"drift_{j + 1}_m"] = measured[:, 6 + j]
-    for j in range(3):
-        columns[f"floor_acceleration_{j + 1}_m_s2"] = measured[:, 9 + j]
-    return columns
+def _measured_columns(times: np.ndarray, samples: CaseSamples) -> dict[str, np.ndarray]:
+    """The motion columns from the sensor readings, as the loop records a dry run (sliding = base - table)."""
+    measured = samples.columns(layout.SENSOR_COLUMNS)
+    measured[layout.TIME] = times
+    measured[layout.SLIDING_DISPLACEMENT] = measured[layout.BASE_DISPLACEMENT] - measured[layout.TABLE_DISPLACEMENT]
+    measured[layout.SLIDING_VELOCITY] = measured[layout.BASE_VELOCITY] - measured[layout.TABLE_VELOCITY]
+    return {name: measured[name] for name in layout.motion_columns(layout.PROTOCOL_STORIES)}

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from drivers.measurements import Measurements
 from harness.model.building import StateSpace
-from harness.signals import Measurements
 
 
 class _SlidingModeInternals:

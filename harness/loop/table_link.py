@@ -1,7 +1,7 @@
 """The harness's link to the shaking table's controller over CAN (profile ``table.link: can``).
 
 A real test starts and stops the table with the same frames the virtual rig obeys:
-RIG_CONTROL ``command`` 1 (start table) when the run enters RUNNING, 2 (stop table) at the
+RIG_CONTROL ``command`` START_TABLE when the run enters RUNNING, STOP_TABLE at the
 end of the run and on a trip (the ``stop_table`` trip action); the table controller reports
 RIG_STATUS ``table_running``, and the loop counts record time from the first tick that
 sees it (:class:`harness.loop.runner.ControlLoop`, ``table_running``). With
@@ -11,7 +11,7 @@ record time follows the harness's clock, and a trip cannot stop the table.
 
 from __future__ import annotations
 
-RIG_START, RIG_STOP = 1, 2
+from drivers.protocol_values import RigCommand
 
 
 class CanTableLink:
@@ -44,12 +44,12 @@ class CanTableLink:
 
     def start(self, t: float) -> None:
         """RUNNING begins: send RIG_CONTROL start table (``t`` is the loop's time, s)."""
-        if self.writer is not None and self.writer.rig_control(RIG_START, self.lockstep, t):
+        if self.writer is not None and self.writer.rig_control(RigCommand.START_TABLE, self.lockstep, t):
             self.starts += 1
 
     def stop(self, now: float) -> bool:
         """Send RIG_CONTROL stop table; True if the bus took it (never raises on a bus failure)."""
-        if self.writer is None or not self.writer.rig_control(RIG_STOP, self.lockstep, now):
+        if self.writer is None or not self.writer.rig_control(RigCommand.STOP_TABLE, self.lockstep, now):
             return False
         self.stops += 1
         return True

@@ -13,19 +13,46 @@ import math
 import time
 from collections.abc import Callable
 
-import can
 import numpy as np
 
-from harness.errors import HarnessError
-from harness.loop.row import COLUMNS, INDEX, N_STORIES
+from harness import rowlayout as layout
+from harness.errors import EXPECTED_ERRORS
 from harness.loop.trip_outputs import TripOutputs
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
 
-DRIVE_READY, DRIVE_ENABLED, DRIVE_FAULT = 1, 2, 3
-_ROW_T, _ROW_STATE = INDEX["t_s"], INDEX["state"]
-_PASSIVE, _BUS_OFF = can.BusState.PASSIVE, can.BusState.ERROR
+
+# Positions in the row (harness.rowlayout.CONTROL_ROW) of what the tick records, looked up by
+# name once, at import. Module constants: a store through one costs what a literal index costs
+# (a global load), less than through an instance attribute.
+_AT = layout.CONTROL_ROW_INDEX
+_T = _AT[layout.TIME]
+_STATE = _AT[layout.STATE]
+_TABLE_DISPLACEMENT = _AT[layout.TABLE_DISPLACEMENT]
+_TABLE_VELOCITY = _AT[layout.TABLE_VELOCITY]
+_TABLE_ACCELERATION = _AT[layout.TABLE_ACCELERATION]
+_BASE_DISPLACEMENT = _AT[layout.BASE_DISPLACEMENT]
+_BASE_VELOCITY = _AT[layout.BASE_VELOCITY]
+_BASE_ACCELERATION = _AT[layout.BASE_ACCELERATION]
+_SLIDING_DISPLACEMENT = _AT[layout.SLIDING_DISPLACEMENT]
+_SLIDING_VELOCITY = _AT[layout.SLIDING_VELOCITY]
+_ESTIMATED_NU = _AT[layout.ESTIMATED_NU]
+_FRICTION_ESTIMATE = _AT[layout.FRICTION_ESTIMATE]
+_SLIDING_VARIABLE = _AT[layout.SLIDING_VARIABLE]
+_EQUIVALENT_FORCE = _AT[layout.EQUIVALENT_FORCE]
+_FORCE_RAW = _AT[layout.FORCE_RAW]
+_FORCE_COMMAND = _AT[layout.FORCE_COMMAND]
+_DRIVE_ENABLED = _AT[layout.DRIVE_ENABLED]
+_FORCE_MEASURED = _AT[layout.FORCE_MEASURED]
+_DRIVE_STATE = _AT[layout.DRIVE_STATE]
+_INTERLOCK_FLAGS = _AT[layout.INTERLOCK_FLAGS]
+_LATENESS = _AT[layout.LATENESS]
+_COMPUTE = _AT[layout.COMPUTE]
+_OVERRUN = _AT[layout.OVERRUN]
+_E2E_REJECTS = _AT[layout.E2E_REJECTS]
+_ERROR_FRAMES = _AT[layout.ERROR_FRAMES]
+_SEND_FAILURES = _AT[layout.SEND_FAILURES]
 
 
 class ControlTick:
@@ -64,7 +91,7 @@ class ControlTick:
         self.recorder = recorder
         self.health = TickHealth()
         self.meas = self.health.meas
-        self.row = np.zeros(len(COLUMNS))
+        self.row = np.zeros(len(layout.CONTROL_ROW))
         self._row_mv = memoryview(self.row)  # the tick writes through it: a third of a numpy item store
         self.heartbeat_every = max(1, int(heartbeat_every))
         self.ticks = 0
@@ -77,8 +104,7 @@ class ControlTick:
         self._drifts, self._accels = reader.sample("STORY_DRIFTS"), reader.sample("FLOOR_ACCELS")
         self._xdd0 = self._table.index("xddot_0")
         self._yddb = self._base.index("yddot_b")
-        self._drift_i = tuple(self._drifts.index(f"drift_{j}") for j in range(1, N_STORIES + 1))
-        self._accel_i = tuple(self._accels.index(f"accel_{j}") for j in range(1, N_STORIES + 1))
+        self._story_slots = self._story_row_slots()
         self._sink = self._record_event if recorder is not None else self._keep_event
         #: The trip's ESTOP frame and table stop (safety.trip_actions), sent after the disable command.
         self.trip_outputs = TripOutputs(link.writer, supervisor.config.trip_actions, estop_every, stop_table)
@@ -90,7 +116,7 @@ class ControlTick:
         if poll:
             try:
                 self.reader.poll(now)
-            except HarnessError:
+            except EXPECTED_ERRORS:
                 health.bus_gone = True
         self.reader.fill(self.meas)
         table, base, status = self._table, self._base, self._status
@@ -102,13 +128,12 @@ class ControlTick:
         health.e2e_rejects = self.reader.e2e_rejects
         bus = self.bus_health
         health.error_frames = bus.error_frames
-        health.error_passive = bus.state is _PASSIVE
-        health.bus_off = bus.state is _BUS_OFF
+        health.error_passive = bus.error_passive
+        health.bus_off = bus.bus_off
         health.send_failures = bus.send_failures
         health.foreign_command = self.reader.foreign_command_seen
-        drive = self.reader.drive_state
-        health.drive_ready = drive in (DRIVE_READY, DRIVE_ENABLED)
-        health.drive_fault = drive == DRIVE_FAULT
+        health.drive_ready = self.reader.drive_ready
+        health.drive_fault = self.reader.drive_fault
         health.pressure_ok = self.reader.pressure_ok
         health.actuator_status_age_s = status.age(now)
         health.measured_force_N = self.reader.measured_force_n
@@ -178,41 +203,50 @@ class ControlTick:
         self.trip_outputs.update(supervisor.state, supervisor.command.trip_reason, now)
 
     # ------------------------------------------------------------------ record
+    def _story_row_slots(self) -> tuple[tuple[int, list[float], int], ...]:
+        """``(row position, decoded values, position in them)`` of every story column of the row.
+
+        The reader updates the story messages' value lists in place, so holding them is safe;
+        the tick copies each story value through this table, with no lookup by name.
+        """
+        drifts, accels = self._drifts, self._accels
+        stories = range(1, layout.PROTOCOL_STORIES + 1)
+        return (
+            *((_AT[layout.drift(j)], drifts.values, drifts.index(f"drift_{j}")) for j in stories),
+            *((_AT[layout.floor_acceleration(j)], accels.values, accels.index(f"accel_{j}")) for j in stories),
+        )
+
     def _fill_row(self, t, command, friction, raw, lateness, compute, overrun) -> None:
-        row, meas = self._row_mv, self.meas
-        table, base = self._table.values, self._base.values
-        row[0] = t
-        row[1] = int(command.state)
-        row[2] = meas.table_displacement_m
-        row[3] = meas.table_velocity_m_s
-        row[4] = table[self._xdd0]
-        row[5] = meas.base_displacement_m
-        row[6] = meas.base_velocity_m_s
-        row[7] = base[self._yddb]
-        row[8] = meas.sliding_displacement_m
-        row[9] = meas.sliding_velocity_m_s
-        drifts, accels = self._drifts.values, self._accels.values
-        for j in range(N_STORIES):
-            row[10 + j] = drifts[self._drift_i[j]]
-            row[10 + N_STORIES + j] = accels[self._accel_i[j]]
-        k = 10 + 2 * N_STORIES
-        controller = self.controller
-        row[k] = self.estimator.nu
-        row[k + 1] = friction
-        row[k + 2] = controller.sliding_variable
-        row[k + 3] = controller.equivalent_force_N
-        row[k + 4] = raw
-        row[k + 5] = command.force_N
-        row[k + 6] = 1.0 if command.enable else 0.0
-        row[k + 7] = self.health.measured_force_N
-        row[k + 8] = self.reader.drive_state
-        row[k + 9] = command.acted
-        row[k + 10] = lateness
-        row[k + 11] = compute
-        row[k + 12] = overrun  # deadlines missed before this tick
-        row[k + 13] = self.health.e2e_rejects
-        row[k + 14] = self.health.error_frames
-        row[k + 15] = self.health.send_failures
+        """Write this tick's values into the row: one store per column, through the named positions."""
+        row, meas, health, controller = self._row_mv, self.meas, self.health, self.controller
+        row[_T] = t
+        row[_STATE] = int(command.state)
+        row[_TABLE_DISPLACEMENT] = meas.table_displacement_m
+        row[_TABLE_VELOCITY] = meas.table_velocity_m_s
+        row[_TABLE_ACCELERATION] = self._table.values[self._xdd0]
+        row[_BASE_DISPLACEMENT] = meas.base_displacement_m
+        row[_BASE_VELOCITY] = meas.base_velocity_m_s
+        row[_BASE_ACCELERATION] = self._base.values[self._yddb]
+        row[_SLIDING_DISPLACEMENT] = meas.sliding_displacement_m
+        row[_SLIDING_VELOCITY] = meas.sliding_velocity_m_s
+        for slot, values, i in self._story_slots:
+            row[slot] = values[i]
+        row[_ESTIMATED_NU] = self.estimator.nu
+        row[_FRICTION_ESTIMATE] = friction
+        row[_SLIDING_VARIABLE] = controller.sliding_variable
+        row[_EQUIVALENT_FORCE] = controller.equivalent_force_N
+        row[_FORCE_RAW] = raw
+        row[_FORCE_COMMAND] = command.force_N
+        row[_DRIVE_ENABLED] = 1.0 if command.enable else 0.0
+        row[_FORCE_MEASURED] = health.measured_force_N
+        row[_DRIVE_STATE] = self.reader.drive_state
+        row[_INTERLOCK_FLAGS] = command.acted
+        row[_LATENESS] = lateness
+        row[_COMPUTE] = compute
+        row[_OVERRUN] = overrun  # deadlines missed before this tick
+        row[_E2E_REJECTS] = health.e2e_rejects
+        row[_ERROR_FRAMES] = health.error_frames
+        row[_SEND_FAILURES] = health.send_failures
 
     def _record_event(self, t: float, kind: str, name: str, detail: str) -> None:
         self.last_event = f"{t:8.3f} s  {kind} {name}: {detail}"

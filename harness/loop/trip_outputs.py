@@ -5,7 +5,7 @@ command first. :class:`TripOutputs` then carries the trip to the other devices t
 profile's ``safety.trip_actions`` names for the class of the check that tripped
 (:data:`harness.safety.config.TRIP_CLASS_OF`), in the trip tick itself:
 
-1. ``estop``: one ESTOP frame, ``active=1``, ``source`` 4 (supervisor), ``reason`` the
+1. ``estop``: one ESTOP frame, ``active=1``, ``source`` SUPERVISOR, ``reason`` the
    check's bit index + 1 (:data:`~harness.safety.events.CHECK_NAMES`; 0 is "unspecified"),
    repeated every ``estop_every`` ticks (``can.estop_rate_hz``) while TRIPPED;
 2. ``stop_table``: one RIG_CONTROL stop to the table controller, where the run has a table
@@ -19,12 +19,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from drivers.protocol_values import EstopSource
 from harness.safety.config import TripActionsConfig
 from harness.safety.events import CHECK_NAMES
 from harness.safety.lifecycle import State
 
-#: ESTOP ``source`` of the harness's safety supervisor (DBC: 0 harness, 1 rig, 2 servo, 3 panel, 4 supervisor).
-SUPERVISOR_SOURCE = 4
+#: ESTOP ``source`` of the harness's safety supervisor (the DBC's value table of ESTOP ``source``).
+SUPERVISOR_SOURCE = EstopSource.SUPERVISOR
 _ESTOP, _STOP_TABLE = 1, 2
 
 

@@ -10,10 +10,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drivers.measurements import Measurements
+from harness import rowlayout as layout
 from harness.model.bearing import BearingConfig, friction_force
 from harness.model.building import BuildingConfig, StateSpace, acceleration_maps, state_space
 from harness.model.integrator import advance, default_atol, make_work, table_state
-from harness.signals import Measurements
 
 
 @dataclass(frozen=True)
@@ -135,18 +136,19 @@ class Plant:
         Parameters
         ----------
         times : ndarray (K,)
+            Sample times (s).
         states : ndarray (K, N + 1)
-            ``(Z, nu)`` at ``times``.
+            ``(Z, nu)`` at ``times`` (SI).
         forces : ndarray (K,)
             Actuator force applied from each sample on (N).
 
         Returns
         -------
         dict
-            Canonical run-folder columns (SI): drifts, absolute floor and base accelerations,
-            sliding displacement and velocity, friction force, nu, table motion.
+            The columns :func:`harness.rowlayout.plant_columns` names, in that order (SI):
+            table motion, base-mat motion and absolute acceleration, sliding displacement
+            and velocity, drifts, absolute floor accelerations, friction force, nu.
         """
-        n = self.building.n_stories
         m = self.model
         table_x, table_v = self.table.states(times)
         sliding_v = states[:, m.i_base_velocity] - table_v
@@ -157,21 +159,19 @@ class Plant:
         z = states[:, : m.size]
         base_acc = z @ base_map + (m.restoring_stiffness_N_per_m * table_x - friction + forces) / m.base_mass_kg
         floor_acc = z @ floor_map.T
-        columns = {
-            "t_s": times,
-            "table_displacement_m": table_x,
-            "table_velocity_m_s": table_v,
-            "table_acceleration_m_s2": self.table.acceleration(times),
-            "base_displacement_m": states[:, m.i_base_displacement],
-            "base_velocity_m_s": states[:, m.i_base_velocity],
-            "base_acceleration_m_s2": base_acc,
-            "sliding_displacement_m": states[:, m.i_base_displacement] - table_x,
-            "sliding_velocity_m_s": sliding_v,
+        stories = range(self.building.n_stories)
+        return {
+            layout.TIME: times,
+            layout.TABLE_DISPLACEMENT: table_x,
+            layout.TABLE_VELOCITY: table_v,
+            layout.TABLE_ACCELERATION: self.table.acceleration(times),
+            layout.BASE_DISPLACEMENT: states[:, m.i_base_displacement],
+            layout.BASE_VELOCITY: states[:, m.i_base_velocity],
+            layout.BASE_ACCELERATION: base_acc,
+            layout.SLIDING_DISPLACEMENT: states[:, m.i_base_displacement] - table_x,
+            layout.SLIDING_VELOCITY: sliding_v,
+            **{layout.drift(j + 1): states[:, j] for j in stories},  # Z begins with the drifts, story 1 first
+            **{layout.floor_acceleration(j + 1): floor_acc[:, j] for j in stories},
+            layout.FRICTION_FORCE: friction,
+            layout.HYSTERETIC_NU: states[:, -1],
         }
-        for j in range(n):
-            columns[f"drift_{j + 1}_m"] = states[:, j]
-        for j in range(n):
-            columns[f"floor_acceleration_{j + 1}_m_s2"] = floor_acc[:, j]
-        columns["friction_force_N"] = friction
-        columns["hysteretic_nu"] = states[:, -1]
-        return columns

@@ -31,6 +31,7 @@ from harness.record.layout import (
 )
 from harness.record.metadata import environment, iso, plain_data, safe_name, utc_now, write_json_atomic, write_profile
 from harness.record.writer import format_rows, row_format
+from harness.rowlayout import TIME
 
 _CHUNK_ROWS = 4096
 
@@ -54,7 +55,7 @@ def write_simulation_case(
     name : str
         Case name, e.g. ``"passive"`` or ``"controlled"``; also stored as ``metadata["case"]``.
     columns : sequence of str
-        Column names, ``t_s`` first (see :mod:`harness.record.columns`).
+        Column names, ``t_s`` first (see :mod:`harness.rowlayout`).
     arrays : mapping of str to ndarray, or ndarray of shape (n, len(columns))
         The time histories (SI units), one equal-length 1-D array per column.
     metadata : mapping
@@ -76,8 +77,8 @@ def write_simulation_case(
         For bad column names, arrays that do not match them, or an existing case folder.
     """
     names = check_columns(list(columns))
-    if names[0] != "t_s":
-        raise RunFolderError(f"found first column {names[0]!r}, expected 't_s'")
+    if names[0] != TIME:
+        raise RunFolderError(f"found first column {names[0]!r}, expected {TIME!r}")
     table = _as_table(names, arrays)
     case_dir = Path(folder) / safe_name(name)
     case_dir.parent.mkdir(parents=True, exist_ok=True)

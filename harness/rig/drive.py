@@ -1,16 +1,18 @@
 """Drive enable logic and the drive-side watchdog of the servo controller.
 
-States (ACTUATOR_STATUS ``drive_state``): 0 OFF, 1 READY, 2 ENABLED, 3 FAULT, 4 ESTOP.
+States and fault codes are the DBC's value tables of ACTUATOR_STATUS ``drive_state``
+(:class:`~drivers.protocol_values.DriveState`: OFF, READY, ENABLED, FAULT, ESTOP) and
+``fault_code`` (:class:`~drivers.protocol_values.FaultCode`).
 
 - OFF -> READY when heartbeats arrive (the latest younger than the watchdog
   timeout) and the hydraulic pressure is ok.
 - READY -> ENABLED on a command frame with ``enable = 1``; ENABLED -> READY on one
   with ``enable = 0``.
-- READY or ENABLED -> FAULT (latched) when the heartbeat stops (code 2), when
-  ENABLED and the commands stop (code 1) for longer than the timeout, when the
-  pressure is lost (code 3), or on an injected drive fault (code from the fault,
-  default 4).
-- any -> ESTOP (latched, code 5) on an E-stop.
+- READY or ENABLED -> FAULT (latched) when the heartbeat stops (HEARTBEAT_WATCHDOG), when
+  ENABLED and the commands stop (COMMAND_WATCHDOG) for longer than the timeout, when the
+  pressure is lost (PRESSURE_LOST), or on an injected drive fault (code from the fault,
+  default INJECTED).
+- any -> ESTOP (latched, code ESTOP) on an E-stop.
 - FAULT and ESTOP clear only on :meth:`Drive.reset` (RIG_CONTROL reset), back to OFF.
 
 Ages are measured on the wall clock the caller passes in (``now``), in lockstep too;
@@ -22,8 +24,9 @@ from __future__ import annotations
 
 import math
 
-OFF, READY, ENABLED, FAULT, ESTOP = 0, 1, 2, 3, 4
-FAULT_NONE, FAULT_COMMAND_WATCHDOG, FAULT_HEARTBEAT_WATCHDOG, FAULT_PRESSURE, FAULT_INJECTED, FAULT_ESTOP = 0, 1, 2, 3, 4, 5
+from drivers.protocol_values import DriveState, FaultCode
+
+_LATCHED = (DriveState.FAULT, DriveState.ESTOP)
 
 
 class Drive:
@@ -41,8 +44,8 @@ class Drive:
 
     def reset(self) -> None:
         """Back to OFF with no fault; forget command and heartbeat times."""
-        self.state = OFF
-        self.fault_code = FAULT_NONE
+        self.state = DriveState.OFF
+        self.fault_code: int = FaultCode.NONE
         self.enable_requested = False
         self.command_N = 0.0
         self.last_command_time = -math.inf
@@ -51,9 +54,9 @@ class Drive:
     @property
     def enabled(self) -> bool:
         """True when the drive applies force."""
-        return self.state == ENABLED
+        return self.state == DriveState.ENABLED
 
-    def _trip(self, state: int, code: int) -> None:
+    def _trip(self, state: DriveState, code: int) -> None:
         self.state = state
         self.fault_code = code
         self.enable_requested = False
@@ -67,17 +70,17 @@ class Drive:
         self.last_command_time = now
         self.enable_requested = bool(enable)
         self.command_N = float(force_N)
-        if self.state == READY and enable:
-            self.state = ENABLED
-        elif self.state == ENABLED and not enable:
-            self.state = READY
+        if self.state == DriveState.READY and enable:
+            self.state = DriveState.ENABLED
+        elif self.state == DriveState.ENABLED and not enable:
+            self.state = DriveState.READY
 
     def on_estop(self) -> None:
         """An E-stop (frame or rig fault): latch ESTOP."""
-        if self.state != ESTOP:
-            self._trip(ESTOP, FAULT_ESTOP)
+        if self.state != DriveState.ESTOP:
+            self._trip(DriveState.ESTOP, FaultCode.ESTOP)
 
-    def update(self, now: float, pressure_ok: bool, injected_code: int = 0) -> int:
+    def update(self, now: float, pressure_ok: bool, injected_code: int = 0) -> DriveState:
         """Run the watchdog and transitions at ``now`` (s); return the state.
 
         Parameters
@@ -89,20 +92,20 @@ class Drive:
         injected_code : int
             Non-zero: an injected drive fault with this code.
         """
-        if self.state in (FAULT, ESTOP):
+        if self.state in _LATCHED:
             return self.state
         heartbeat_ok = now - self.last_heartbeat_time <= self.timeout_s
-        if self.state == OFF:
+        if self.state == DriveState.OFF:
             if heartbeat_ok and pressure_ok and not injected_code:
-                self.state = READY
+                self.state = DriveState.READY
             else:
                 return self.state
         if injected_code:
-            self._trip(FAULT, injected_code)
+            self._trip(DriveState.FAULT, injected_code)
         elif not pressure_ok:
-            self._trip(FAULT, FAULT_PRESSURE)
+            self._trip(DriveState.FAULT, FaultCode.PRESSURE_LOST)
         elif not heartbeat_ok:
-            self._trip(FAULT, FAULT_HEARTBEAT_WATCHDOG)
-        elif self.state == ENABLED and now - self.last_command_time > self.timeout_s:
-            self._trip(FAULT, FAULT_COMMAND_WATCHDOG)
+            self._trip(DriveState.FAULT, FaultCode.HEARTBEAT_WATCHDOG)
+        elif self.state == DriveState.ENABLED and now - self.last_command_time > self.timeout_s:
+            self._trip(DriveState.FAULT, FaultCode.COMMAND_WATCHDOG)
         return self.state

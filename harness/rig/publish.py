@@ -13,7 +13,7 @@ from __future__ import annotations
 import can
 
 from drivers.e2e import COUNTER_MODULO
-from drivers.reader import PANEL_SOURCE
+from drivers.protocol_values import EstopSource
 from drivers.writer import RigWriter, TxFrame
 from harness.rig import faults as F
 from harness.rig.faults import TARGETS, FaultSet
@@ -38,8 +38,8 @@ class RigPublisher:
         self._estop = writer.frame("ESTOP")
         self._ranges = tuple(tuple((s.minimum, s.maximum) for s in tx.codec.signals) for tx in self.frames)
         self._values = tuple([0.0] * len(tx.codec.signals) for tx in self.frames)
-        self._estop_values = [1.0, 1.0, 0.0]
-        self._panel_values = [0.0, float(PANEL_SOURCE), 0.0]  # active, source 3 (panel), reason
+        self._estop_values = [1.0, float(EstopSource.RIG), 0.0]  # active, source, reason
+        self._panel_values = [0.0, float(EstopSource.PANEL), 0.0]
         self.panel_sent = 0
         self.sent = [0] * len(TARGETS)
         self.suppressed = 0
@@ -81,14 +81,14 @@ class RigPublisher:
         return self.send(5, values, now)
 
     def estop(self, now: float) -> bool:
-        """Send an active ESTOP from the rig (source 1)."""
+        """Send an active ESTOP from the rig (source ``RIG``)."""
         if self.faults.is_on(F.BUS_SILENCE):
             self.suppressed += 1
             return False
         return self.writer.send_frame(self._estop, self._estop_values, now)
 
     def panel(self, now: float, pressed: bool = False) -> bool:
-        """Send the E-stop panel's frame (source 3): its heartbeat with ``active=0``, or a press.
+        """Send the E-stop panel's frame (source ``PANEL``): its heartbeat with ``active=0``, or a press.
 
         The panel is a node of its own on a real rig; the virtual rig emulates it on its own
         ESTOP frame (one rolling counter for the rig's and the panel's frames on this ID).

@@ -28,10 +28,10 @@ import can
 import numpy as np
 
 from drivers.codec import load_protocol
-from drivers.config import CanConfig
+from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from drivers.writer import RigWriter
+from harness.can_config import CanConfig
 from harness.errors import ModelError
-from harness.rig import drive as D
 from harness.rig import faults as F
 from harness.rig import inbox as rx
 from harness.rig.actuator import ServoActuator
@@ -50,9 +50,6 @@ if TYPE_CHECKING:
     from drivers.link import RigLink
     from harness.profile import Profile
     from harness.records import GroundMotion
-
-START_TABLE, STOP_TABLE, RESET = 1, 2, 3
-
 
 class VirtualRig:
     """The 4-DOF rig on a CAN bus.
@@ -76,7 +73,7 @@ class VirtualRig:
     clock : callable
         Wall clock (s) for the runner thread.
     can_config : CanConfig, optional
-        Message rates (real time); defaults of :class:`~drivers.config.CanConfig`.
+        Message rates (real time); defaults of :class:`~harness.can_config.CanConfig`.
     """
 
     def __init__(
@@ -146,7 +143,7 @@ class VirtualRig:
         self.force_N = 0.0
         self._t0: float | None = None
         self._announce = self.lockstep
-        self._last_drive_state = D.OFF
+        self._last_drive_state = DriveState.OFF
         self._last_status_time = -math.inf
         self._last_panel_time = -math.inf
         self._panel_next_step = 0
@@ -184,7 +181,7 @@ class VirtualRig:
             self.drive.on_estop()
         code = 0
         if faults.is_on(F.DRIVE_FAULT):
-            code = int(min(max(faults.param[F.DRIVE_FAULT, 0], 0.0), 255.0)) or D.FAULT_INJECTED
+            code = int(min(max(faults.param[F.DRIVE_FAULT, 0], 0.0), 255.0)) or FaultCode.INJECTED
         drive = self.config.drive
         self.drive.timeout_s = drive.lockstep_watchdog_timeout_s if self.lockstep else drive.watchdog_timeout_s
         self.drive.update(now, self.pressure_ok, code)
@@ -275,15 +272,15 @@ class VirtualRig:
             self.step_index = 0
             self._t0 = None
         command = int(command)
-        if command == RESET:
+        if command == RigCommand.RESET:
             self._reset_rig()
-        elif command == START_TABLE and not self.table.running and not self.armed:
+        elif command == RigCommand.START_TABLE and not self.table.running and not self.armed:
             if self.lockstep:
                 self.armed = True
             else:
                 self.table.start()
                 self.faults.reset_schedule()
-        elif command == STOP_TABLE:
+        elif command == RigCommand.STOP_TABLE:
             self.armed = False
             self.table.stop()
         self._update_faults()

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from harness.signals import Measurements
+from drivers.measurements import Measurements
 
 
 @dataclass(slots=True)

@@ -16,14 +16,15 @@ import uuid
 import numpy as np
 import pytest
 
-from drivers.config import CanConfig
-from drivers.link import open_harness, open_rig
+from drivers.measurements import Measurements
+from drivers.protocol_values import DriveState, RigCommand
+from harness.can_config import CanConfig
+from harness.can_link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.peaks import flatten, peak_responses
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig, SensorsConfig
 from harness.rig.virtual_rig import RigParts, VirtualRig
-from harness.signals import Measurements
 from harness.control.factory import make_controller
 from harness.study import StudyOptions, prepare_motion, run_study
 from tests.conftest import PROFILES
@@ -69,7 +70,7 @@ def _closed_loop(profile, motion, rate_hz: float) -> dict:
         try:
             writer, reader = link.writer, link.reader
             writer.heartbeat(1, time.monotonic())
-            writer.rig_control(1, True, time.monotonic())  # lockstep on, start the table
+            writer.rig_control(RigCommand.START_TABLE, True, time.monotonic())  # lockstep on, start the table
             for k in range(n_steps):
                 _wait_for_step(reader, k)
                 reader.fill(meas)
@@ -80,7 +81,7 @@ def _closed_loop(profile, motion, rate_hz: float) -> dict:
                     writer.heartbeat(1, time.monotonic())
                 assert writer.command(force, True, time.monotonic())
             _wait_for_step(reader, n_steps)
-            assert reader.drive_state == 2, "the drive must have stayed enabled"
+            assert reader.drive_state == DriveState.ENABLED, "the drive must have stayed enabled"
         finally:
             rig.stop()
         return rig.record_columns()

@@ -19,13 +19,13 @@ import can
 import numpy as np
 import pytest
 
-from drivers.config import CanConfig
 from drivers.decoder import RxStatus
-from drivers.link import open_harness, open_rig
+from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from harness import exit_codes
+from harness.can_config import CanConfig
+from harness.can_link import open_harness, open_rig
 from harness.errors import BusError
 from harness.profile import load_profile
-from harness.rig import drive as D
 from harness.rig.config import ActuatorConfig, DisplacementSensorConfig, DriveConfig, FaultSpec, RigConfig, SensorsConfig
 from harness.rig.command import run_rig_command
 from harness.rig.faults import fault_id_for
@@ -82,10 +82,10 @@ class Bench:
     def start(self) -> None:
         """Heartbeat, lockstep on and table start (the harness's opening)."""
         self.writer.heartbeat(1, self.now)
-        self.writer.rig_control(1, self.rig.lockstep, self.now)
+        self.writer.rig_control(RigCommand.START_TABLE, self.rig.lockstep, self.now)
         self.service()
 
-    def control(self, command: int = 0, fault_id: int = 0, param: float = 0.0) -> None:
+    def control(self, command: int = RigCommand.NONE, fault_id: int = 0, param: float = 0.0) -> None:
         self.writer.rig_control(command, self.rig.lockstep, self.now, fault_id, param)
         self.service()
 
@@ -198,7 +198,7 @@ def test_published_values_match_the_plant_history(bench):
 def test_real_time_delay_measured_against_plant_time(bench):
     config = quiet_config(sensors=SensorsConfig(displacement=DisplacementSensorConfig(delay_s=0.003)))
     b = bench(config, lockstep=False)
-    b.writer.rig_control(1, False, 0.0)
+    b.writer.rig_control(RigCommand.START_TABLE, False, 0.0)
     b.service(0.0)
     for _ in range(100):
         b.service(PERIOD)
@@ -220,37 +220,37 @@ def test_watchdog_trips_when_commands_stop(bench):
     b.writer.command(3000.0, True, b.now)
     b.service(0.0)
     b.service(0.004)  # ACTUATOR_STATUS every 4 ms
-    assert b.reader.drive_state == D.ENABLED
+    assert b.reader.drive_state == DriveState.ENABLED
     for _ in range(19):  # heartbeats continue, commands stopped at t = 0
         b.writer.heartbeat(1, b.now)
         b.service(0.002)
-    assert b.rig.state.drive_state == D.ENABLED, "42 ms < 50 ms timeout"
+    assert b.rig.state.drive_state == DriveState.ENABLED, "42 ms < 50 ms timeout"
     b.writer.heartbeat(1, b.now)
     b.service(0.01)
-    assert b.reader.drive_state == D.FAULT and b.reader.fault_code == D.FAULT_COMMAND_WATCHDOG
+    assert b.reader.drive_state == DriveState.FAULT and b.reader.fault_code == FaultCode.COMMAND_WATCHDOG
     force_at_trip = b.rig.state.actuator_force_N
     for _ in range(50):
         b.service(0.002)
     assert abs(b.rig.state.actuator_force_N) < 0.02 * abs(force_at_trip), "force decays to zero"
     b.writer.command(3000.0, True, b.now)
     b.service(0.002)
-    assert b.rig.state.drive_state == D.FAULT, "latched"
-    b.control(command=3)
+    assert b.rig.state.drive_state == DriveState.FAULT, "latched"
+    b.control(command=RigCommand.RESET)
     b.writer.heartbeat(1, b.now)
     b.service(0.002)
-    assert b.rig.state.drive_state == D.READY, "reset clears the latch"
+    assert b.rig.state.drive_state == DriveState.READY, "reset clears the latch"
 
 
 def test_lockstep_watchdog_runs_on_the_wall_clock(bench):
     b = bench(quiet_config(drive=DriveConfig(watchdog_timeout_s=0.05, lockstep_watchdog_timeout_s=1.0)))
     b.start()
     b.step(100.0)
-    assert b.rig.state.drive_state == D.ENABLED
+    assert b.rig.state.drive_state == DriveState.ENABLED
     b.service(0.2)  # a slow host: 0.2 s without a step is far past the real-time 50 ms, not past the lockstep bound
-    assert b.rig.state.drive_state == D.ENABLED
+    assert b.rig.state.drive_state == DriveState.ENABLED
     b.service(1.3)  # no frames: the lockstep loop's poll timeout calls service with the time
-    assert b.rig.state.drive_state == D.FAULT
-    assert b.reader.drive_state == D.FAULT, "announced between steps"
+    assert b.rig.state.drive_state == DriveState.FAULT
+    assert b.reader.drive_state == DriveState.FAULT, "announced between steps"
 
 
 # ----------------------------------------------------------------------------- faults
@@ -360,14 +360,14 @@ def test_drive_fault_pressure_loss_and_rig_estop(bench):
     b.start()
     b.step(n=2)
     b.control(fault_id=fault_id_for("drive_fault"), param=42)
-    assert b.reader.drive_state == D.FAULT and b.reader.fault_code == 42
+    assert b.reader.drive_state == DriveState.FAULT and b.reader.fault_code == 42
     b.control(fault_id=0, command=3)
     b.step(n=2)
-    assert b.reader.drive_state == D.ENABLED, "reset and fault clear bring the drive back"
+    assert b.reader.drive_state == DriveState.ENABLED, "reset and fault clear bring the drive back"
     b.control(fault_id=fault_id_for("pressure_lost"))
-    assert not b.reader.pressure_ok and b.reader.drive_state == D.FAULT and b.reader.fault_code == D.FAULT_PRESSURE
+    assert not b.reader.pressure_ok and b.reader.drive_state == DriveState.FAULT and b.reader.fault_code == FaultCode.PRESSURE_LOST
     b.control(fault_id=fault_id_for("estop"))
-    assert b.reader.estop_requested and b.reader.drive_state == D.ESTOP
+    assert b.reader.estop_requested and b.reader.drive_state == DriveState.ESTOP
 
 
 def test_estop_frame_from_the_harness_latches_estop(bench):
@@ -376,7 +376,7 @@ def test_estop_frame_from_the_harness_latches_estop(bench):
     b.step(n=2)
     b.link.writer.estop(True, b.now)
     b.step()
-    assert b.reader.drive_state == D.ESTOP and b.rig.state.actuator_force_N < 1.0
+    assert b.reader.drive_state == DriveState.ESTOP and b.rig.state.actuator_force_N < 1.0
 
 
 def test_scheduled_fault_follows_record_time(bench):
@@ -397,7 +397,7 @@ def test_reset_puts_the_plant_at_rest(bench):
     b.start()
     b.step(3000.0, n=20)
     assert np.any(b.rig.table.y != 0.0)
-    b.control(command=3)
+    b.control(command=RigCommand.RESET)
     state = b.rig.state
     assert np.all(b.rig.table.y == 0.0) and not state.table_running and state.step_index == 0
     assert b.value("RIG_STATUS", "step_index") == 0
@@ -416,7 +416,7 @@ def test_real_time_thread_plays_the_record(bench, profile):
     b = bench(profile.rig, lockstep=False)
     b.rig.start_thread()
     try:
-        b.writer.rig_control(1, False, time.monotonic())
+        b.writer.rig_control(RigCommand.START_TABLE, False, time.monotonic())
         _poll_until(b.reader, lambda: b.reader.sample("RIG_STATUS").count and b.value("RIG_STATUS", "record_time") > 0.2)
         assert b.reader.table.count > 20 and b.reader.sample("STORY_DRIFTS").count > 10
         assert b.value("RIG_STATUS", "lockstep") == 0
@@ -447,7 +447,7 @@ def test_run_rig_command_serves_and_stops_cleanly():
         thread.join(10.0)
         assert not thread.is_alive() and result["status"] == exit_codes.OK
         link.reader.poll(time.monotonic())
-        assert link.reader.drive_state == D.OFF, "the last status says the drive is off"
+        assert link.reader.drive_state == DriveState.OFF, "the last status says the drive is off"
     finally:
         stop.set()
         link.close()

@@ -11,6 +11,7 @@ from harness.model.reference import ReferencePlant
 from harness.peaks import flatten
 from harness.profile import load_profile
 from harness.records import load_motion
+from harness.rowlayout import simulation_columns
 from harness.simulation import SamplingSettings, run_case
 from harness.control.factory import make_controller
 from tests.conftest import PROFILES
@@ -146,3 +147,22 @@ def test_estimator_friction_source_is_close_to_model_source():
     model = _rig_case(500.0, "phi", friction="model")
     estimated = _rig_case(500.0, "phi", friction="estimator")
     assert estimated.peaks["sliding_displacement_m"] == pytest.approx(model.peaks["sliding_displacement_m"], rel=0.1)
+
+
+@pytest.mark.parametrize("controller, delay_s", [(None, 0.0), ("FSF-I", 0.0), ("FSF-I", 0.003)])
+def test_case_columns_follow_the_row_layout(controller, delay_s):
+    profile = load_profile(PROFILES / "eight_story.yaml")
+    plant = Plant(profile.structure, profile.bearing, _motion(profile, "synthetic", 1.0))
+    settings = SamplingSettings(profile.control.rate_hz, delay_s, "estimator")
+    ctrl = None if controller is None else make_controller(profile, controller)
+    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    reports: list[float] = []
+    result = run_case("case", plant, 1.0, settings, ctrl, estimator, progress=reports.append)
+    assert tuple(result.columns) == simulation_columns(profile.structure.n_stories, controlled=ctrl is not None)
+    rows = round(profile.control.rate_hz) + 1
+    assert {len(values) for values in result.columns.values()} == {rows}
+    assert reports[0] == 0.0 and reports[-1] == 1.0
+    force = result.columns["force_command_N"]
+    if ctrl is not None and delay_s == 0.0:
+        np.testing.assert_array_equal(force[:-1], result.columns["force_raw_N"][:-1])  # applied as computed
+        assert force[-1] == force[-2]  # the last force holds over the end of the last interval

@@ -16,7 +16,7 @@ import uuid
 
 import pytest
 
-from drivers.link import open_harness, open_rig
+from harness.can_link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.loop.runner import ControlLoop
 from harness.loop.tick import ControlTick

@@ -1,8 +1,8 @@
 """The driver contract: one set of tests every python-can backend must pass.
 
 :class:`BusContract` holds the test bodies; a backend subclasses it and provides
-two fixtures, ``config`` (a CanConfig for a usable channel) and ``nonexistent``
-(a CanConfig that cannot be opened, and a regex the BusError must match).
+two fixtures, ``config`` (a :class:`Channel` that can be opened) and ``nonexistent``
+(a Channel that cannot be opened, and a regex the BusError must match).
 :class:`TestVirtualContract` runs it on python-can's ``virtual`` interface here;
 tests/vcan/test_socketcan_contract.py runs the same bodies on SocketCAN ``vcan0``.
 
@@ -16,6 +16,7 @@ import time
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 import can
 import pytest
@@ -23,14 +24,21 @@ import pytest
 from drivers.bus import kernel_has_socketcan, open_bus, socketcan_preflight
 from drivers.codec import MessageCodec, load_protocol
 from drivers.decoder import Decoder, RxStatus
-from drivers.config import CanConfig
+from drivers.errors import BusError
 from drivers.reader import FrameReader, HarnessReader
 from drivers.writer import FrameWriter, HarnessWriter
-from harness.errors import BusError
 
 PROTOCOL = load_protocol()
 NAMES = sorted(PROTOCOL.messages)
 RECV_TIMEOUT_S = 2.0
+
+
+class Channel(NamedTuple):
+    """What :func:`drivers.bus.open_bus` takes: ``open_bus(*channel)``."""
+
+    interface: str
+    channel: str
+    bitrate_bps: int = 1_000_000
 
 
 def midrange_values(codec: MessageCodec) -> list[float]:
@@ -59,14 +67,14 @@ class BusContract:
     """Contract test bodies; subclasses provide the ``config`` and ``nonexistent`` fixtures."""
 
     @pytest.fixture
-    def pair(self, config: CanConfig) -> Iterator[tuple[can.BusABC, can.BusABC]]:
-        sender, receiver = open_bus(config), open_bus(config)
+    def pair(self, config: Channel) -> Iterator[tuple[can.BusABC, can.BusABC]]:
+        sender, receiver = open_bus(*config), open_bus(*config)
         yield sender, receiver
         sender.shutdown()
         receiver.shutdown()
 
-    def test_open_gives_a_python_can_bus(self, config: CanConfig) -> None:
-        bus = open_bus(config)
+    def test_open_gives_a_python_can_bus(self, config: Channel) -> None:
+        bus = open_bus(*config)
         try:
             assert isinstance(bus, can.BusABC)
             assert bus.protocol == can.CanProtocol.CAN_20  # classic CAN, as the DBC assumes
@@ -114,9 +122,9 @@ class BusContract:
         assert recv_id(receiver, PROTOCOL["HEARTBEAT"].frame_id) is not None
         assert sender.recv(timeout=0.05) is None
 
-    def test_command_from_another_node_is_foreign_own_is_not(self, pair: tuple[can.BusABC, can.BusABC], config: CanConfig) -> None:
+    def test_command_from_another_node_is_foreign_own_is_not(self, pair: tuple[can.BusABC, can.BusABC], config: Channel) -> None:
         other, harness_bus = pair
-        reader = HarnessReader(harness_bus, PROTOCOL, config)
+        reader = HarnessReader(harness_bus, PROTOCOL)
         assert HarnessWriter(harness_bus, PROTOCOL).command(10.0, True, now=0.0)
         assert recv_id(other, PROTOCOL["ACTUATOR_CMD"].frame_id) is not None  # it did go out
         time.sleep(0.05)  # a genuine bus wait: an echo, if any, would have arrived by now
@@ -129,8 +137,8 @@ class BusContract:
             time.sleep(0.001)
         assert reader.counters.foreign_commands == 1
 
-    def test_shutdown_is_clean_and_idempotent(self, config: CanConfig) -> None:
-        bus = open_bus(config)
+    def test_shutdown_is_clean_and_idempotent(self, config: Channel) -> None:
+        bus = open_bus(*config)
         writer = FrameWriter(bus, PROTOCOL, ["HEARTBEAT"])
         reader = FrameReader(bus, PROTOCOL, ["HEARTBEAT"])
         bus.shutdown()
@@ -142,37 +150,37 @@ class BusContract:
         with pytest.raises(BusError):
             reader.poll(now=0.0)
 
-    def test_unopenable_channel_is_a_clear_bus_error(self, nonexistent: tuple[CanConfig, str]) -> None:
+    def test_unopenable_channel_is_a_clear_bus_error(self, nonexistent: tuple[Channel, str]) -> None:
         config, pattern = nonexistent
         with pytest.raises(BusError, match=pattern):
-            open_bus(config)
+            open_bus(*config)
 
 
 class TestVirtualContract(BusContract):
     """The contract on python-can's in-process ``virtual`` interface (always available)."""
 
     @pytest.fixture
-    def config(self) -> CanConfig:
-        return CanConfig(interface="virtual", channel=f"contract-{uuid.uuid4().hex}")
+    def config(self) -> Channel:
+        return Channel("virtual", f"contract-{uuid.uuid4().hex}")
 
     @pytest.fixture
-    def nonexistent(self) -> tuple[CanConfig, str]:
+    def nonexistent(self) -> tuple[Channel, str]:
         # virtual channels are created on demand; the unopenable case is an unknown interface
-        return CanConfig(interface="no_such_interface", channel="x"), r"'no_such_interface' is not available.*virtual"
+        return Channel("no_such_interface", "x"), r"'no_such_interface' is not available.*virtual"
 
 
 class TestSeqPacketContract(BusContract):
     """The contract on this project's ``seqpacket`` interface (Unix SOCK_SEQPACKET; the first bus opened is the hub)."""
 
     @pytest.fixture
-    def config(self) -> CanConfig:
-        return CanConfig(interface="seqpacket", channel=f"contract-{uuid.uuid4().hex}")
+    def config(self) -> Channel:
+        return Channel("seqpacket", f"contract-{uuid.uuid4().hex}")
 
     @pytest.fixture
-    def nonexistent(self, tmp_path: Path) -> tuple[CanConfig, str]:
+    def nonexistent(self, tmp_path: Path) -> tuple[Channel, str]:
         # names are created on demand; the unopenable case is a socket path in a missing directory
         missing = tmp_path / "no_such_dir" / "bus.sock"
-        return CanConfig(interface="seqpacket", channel=str(missing)), r"seqpacket.*directory .*no_such_dir.* does not exist"
+        return Channel("seqpacket", str(missing)), r"seqpacket.*directory .*no_such_dir.* does not exist"
 
 
 # --- open_bus error messages (no bus needed) -----------------------------------------------
@@ -208,13 +216,13 @@ def test_socketcan_on_this_machine_fails_with_a_fix_when_unavailable() -> None:
         pytest.skip("an interface named vcan_missing9 exists here")
     expected = "ip link add dev vcan_missing9" if kernel_has_socketcan() else "modprobe vcan"
     with pytest.raises(BusError, match=expected):
-        open_bus(CanConfig(interface="socketcan", channel="vcan_missing9"))
+        open_bus(*Channel("socketcan", "vcan_missing9"))
 
 
 def test_missing_driver_library_is_a_bus_error() -> None:
     # pcan needs the vendor's PCANBasic library, absent on CI machines
     try:
-        bus = open_bus(CanConfig(interface="pcan", channel="PCAN_USBBUS1"))
+        bus = open_bus(*Channel("pcan", "PCAN_USBBUS1"))
     except BusError as err:
         assert "pcan" in str(err) and "PCAN_USBBUS1" in str(err)
     else:

@@ -1,4 +1,8 @@
-"""drivers/busload.py: frame length formula, load from DBC and rates, refusal above the allowed share."""
+"""drivers/busload.py: frame length formula, load from DBC and rates, refusal above the allowed share.
+
+Also the profile's side: harness/can_config.py (rates of every message) and harness/can_link.py
+(refusal before the bus is opened).
+"""
 
 from __future__ import annotations
 
@@ -6,13 +10,19 @@ import dataclasses
 
 import pytest
 
-from drivers.busload import bus_load, check_bus_load, frame_bits
+from drivers.busload import BusLoad, bus_load, check_bus_load, frame_bits
 from drivers.codec import load_protocol
-from drivers.config import RATE_FIELDS, CanConfig
-from harness.errors import BusLoadError, ProfileError, ProtocolError
+from drivers.errors import BusLoadError, ProtocolError
+from harness.can_config import RATE_FIELDS, CanConfig
+from harness.errors import ProfileError
 from harness.schema import build
 
 PROTOCOL = load_protocol()
+
+
+def check(config: CanConfig) -> BusLoad:
+    """:func:`check_bus_load` with the rates, bitrate and allowed share of ``config``."""
+    return check_bus_load(PROTOCOL, config.rates_hz(), config.bitrate_bps, config.max_bus_load)
 
 
 def test_eight_byte_standard_frame_is_about_130_us_at_1_mbit() -> None:
@@ -49,7 +59,7 @@ def test_load_is_sum_of_rate_times_frame_bits() -> None:
 def test_default_config_fits_500_hz_control_at_1_mbit() -> None:
     config = CanConfig()
     assert config.command_rate_hz >= 500 and config.sensor_rate_hz >= 500
-    load = check_bus_load(config, PROTOCOL)
+    load = check(config)
     assert 0.0 < load.share <= config.max_bus_load
 
 
@@ -58,7 +68,7 @@ def test_overload_is_refused_with_the_figure() -> None:
     share = bus_load(PROTOCOL, config.rates_hz(), config.bitrate_bps).share
     assert share > 0.5
     with pytest.raises(BusLoadError) as info:
-        check_bus_load(config, PROTOCOL)
+        check(config)
     assert f"{share:.1%}" in str(info.value)
     assert "allowed 50.0%" in str(info.value)
     assert "TABLE_SENSORS" in str(info.value)
@@ -66,15 +76,15 @@ def test_overload_is_refused_with_the_figure() -> None:
 
 def test_lower_bitrate_or_tighter_share_refuses_the_default_rates() -> None:
     with pytest.raises(BusLoadError):
-        check_bus_load(dataclasses.replace(CanConfig(), bitrate_bps=250_000), PROTOCOL)
+        check(dataclasses.replace(CanConfig(), bitrate_bps=250_000))
     with pytest.raises(BusLoadError):
-        check_bus_load(dataclasses.replace(CanConfig(), max_bus_load=0.1), PROTOCOL)
+        check(dataclasses.replace(CanConfig(), max_bus_load=0.1))
 
 
 def test_share_exactly_at_the_limit_is_accepted() -> None:
     config = CanConfig()
     share = bus_load(PROTOCOL, config.rates_hz(), config.bitrate_bps).share
-    check_bus_load(dataclasses.replace(config, max_bus_load=share), PROTOCOL)
+    check(dataclasses.replace(config, max_bus_load=share))
 
 
 def test_rates_and_dbc_must_agree() -> None:
@@ -98,23 +108,26 @@ def test_config_from_yaml_mapping_with_units() -> None:
 
 
 def test_overloaded_link_is_refused_before_the_bus_is_opened(monkeypatch: pytest.MonkeyPatch) -> None:
-    import drivers.link as link
+    import drivers.link
+    from harness import can_link
 
-    def must_not_open(config: CanConfig) -> None:
+    def must_not_open(*args: object, **kwargs: object) -> None:
         raise AssertionError("the bus was opened for a refused configuration")
 
-    monkeypatch.setattr(link, "open_bus", must_not_open)
+    monkeypatch.setattr(drivers.link, "open_bus", must_not_open)
     overloaded = dataclasses.replace(CanConfig(), sensor_rate_hz=2000.0, command_rate_hz=2000.0)
     with pytest.raises(BusLoadError, match="exceeds the allowed 50.0%"):
-        link.open_harness(overloaded)
+        can_link.open_harness(overloaded)
     with pytest.raises(BusLoadError):
-        link.open_rig(overloaded)
+        can_link.open_rig(overloaded)
     with pytest.raises(ProtocolError, match="names CAN protocol version 9"):
-        link.open_harness(dataclasses.replace(CanConfig(), protocol_version=9))
+        can_link.open_harness(dataclasses.replace(CanConfig(), protocol_version=9))
+    with pytest.raises(BusLoadError):
+        drivers.link.open_harness("virtual", "x", 1_000_000, overloaded.rates_hz())
 
 
 def test_prepare_accepts_the_defaults() -> None:
-    from drivers.link import prepare
+    from harness.can_link import prepare
 
     protocol, load = prepare(CanConfig())
     assert protocol.version == CanConfig().protocol_version

@@ -18,15 +18,16 @@ from drivers import bus as busmod
 from drivers.bus import BusHealth, open_bus
 from drivers.codec import load_protocol
 from drivers.decoder import RxStatus
+from drivers.errors import BusError, ProtocolError
 from drivers.link import open_harness, open_rig
-from drivers.config import CanConfig
+from drivers.measurements import Measurements
+from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from drivers.reader import FrameReader, HarnessReader, RigReader
 from drivers.writer import HarnessWriter, RigWriter
-from harness.errors import BusError, ProtocolError
-from harness.signals import Measurements
 
 PROTOCOL = load_protocol()
-CONFIG = CanConfig()
+#: A modest rate for every message (Hz), for the links opened here.
+RATES_HZ = {name: 50.0 for name in PROTOCOL.messages}
 
 
 class FakeBus:
@@ -64,8 +65,7 @@ def error_frame(error_class: int, ctrl: int = 0) -> can.Message:
 
 
 def harness_reader(bus: FakeBus, **kwargs: object) -> HarnessReader:
-    config = CanConfig(**kwargs) if kwargs else CONFIG
-    return HarnessReader(bus, PROTOCOL, config)  # type: ignore[arg-type]
+    return HarnessReader(bus, PROTOCOL, **kwargs)  # type: ignore[arg-type]
 
 
 # --- reader: latest sample and age ----------------------------------------------------
@@ -90,7 +90,7 @@ def test_reader_keeps_latest_sample_with_receive_time_and_age() -> None:
 def test_reader_can_take_receive_time_from_the_frame() -> None:
     # the frame's wall-clock stamp, 0.25 s before the poll, moved onto the loop's clock
     bus = FakeBus([frame("BASE_SENSORS", [0.0, 0.0, 0.0], timestamp=time.time() - 0.25)])
-    reader = harness_reader(bus, timestamp_source="message")
+    reader = harness_reader(bus, use_msg_timestamp=True)
     reader.poll(now=999.0)
     assert reader.sample("BASE_SENSORS").rx_time == pytest.approx(999.0 - 0.25, abs=0.05)
     assert reader.sample("BASE_SENSORS").age(999.0) == pytest.approx(0.25, abs=0.05)
@@ -137,7 +137,8 @@ def test_fill_measurements_and_sensor_age() -> None:
     bus = FakeBus([frame("TABLE_SENSORS", [0.011, 0.12, 0.0]), frame("BASE_SENSORS", [-0.002, 0.034, 0.0])])
     reader = harness_reader(bus)
     assert reader.sensor_age(0.0) == math.inf
-    assert (reader.drive_state, reader.pressure_ok) == (0, False)  # safe before any status frame
+    assert (reader.drive_state, reader.pressure_ok) == (DriveState.OFF, False)  # safe before any status frame
+    assert not reader.drive_ready and not reader.drive_fault
     reader.poll(now=5.0)
     meas = Measurements()
     reader.fill(meas)
@@ -178,9 +179,9 @@ def test_any_actuator_command_frame_is_foreign_even_from_this_host() -> None:
 
 
 def test_own_commands_are_not_foreign_over_a_bus() -> None:
-    config = CanConfig(channel=f"own-{uuid.uuid4().hex}")
-    with open_bus(config) as harness_bus, open_bus(config) as other_bus:
-        writer, reader = HarnessWriter(harness_bus, PROTOCOL), HarnessReader(harness_bus, PROTOCOL, config)
+    channel = f"own-{uuid.uuid4().hex}"
+    with open_bus("virtual", channel) as harness_bus, open_bus("virtual", channel) as other_bus:
+        writer, reader = HarnessWriter(harness_bus, PROTOCOL), HarnessReader(harness_bus, PROTOCOL)
         assert writer.command(100.0, True, now=0.0)
         reader.poll(0.0)
         assert not reader.foreign_command_seen
@@ -244,7 +245,7 @@ def test_error_frames_are_classified_and_not_decoded() -> None:
     health = reader.health
     assert health.error_frames == 4
     assert health.error_warning_events == 1 and health.error_passive_events == 1
-    assert health.state == can.BusState.PASSIVE and not health.bus_off
+    assert health.state == can.BusState.PASSIVE and health.error_passive and not health.bus_off
     assert health.protocol_errors == 1 and health.ack_errors == 1
     assert sum(reader.decoder.counts) == 0
 
@@ -257,10 +258,10 @@ def test_bus_off_latches_until_restarted() -> None:
     assert reader.health.last_error_time == 1.0
     bus.rx.append(error_frame(busmod.CAN_ERR_CRTL, busmod.CAN_ERR_CRTL_RX_PASSIVE))
     reader.poll(2.0)
-    assert reader.health.bus_off  # error-passive does not undo bus-off
+    assert reader.health.bus_off and not reader.health.error_passive  # error-passive does not undo bus-off
     bus.rx.append(error_frame(busmod.CAN_ERR_RESTARTED))
     reader.poll(3.0)
-    assert not reader.health.bus_off and reader.health.restarts == 1
+    assert not reader.health.bus_off and not reader.health.error_passive and reader.health.restarts == 1
 
 
 # --- writer: counters, reuse, send failures -------------------------------------------
@@ -273,7 +274,7 @@ def test_writer_counter_sequence_wraps_and_frames_decode_in_order() -> None:
         assert writer.command(float(k), True, now=k * 0.002)
     counters = [data[1] & 0x0F for _, data in bus.sent]
     assert counters == [k % 16 for k in range(20)]
-    rig = RigReader(FakeBus(), PROTOCOL, CONFIG)  # type: ignore[arg-type]
+    rig = RigReader(FakeBus(), PROTOCOL)  # type: ignore[arg-type]
     statuses = [rig.decoder.decode(0x20, data) for _, data in bus.sent]
     assert statuses == [RxStatus.OK] * 20
     assert rig.decoder.values("ACTUATOR_CMD") == [1.0, 19.0]
@@ -329,21 +330,22 @@ def test_out_of_range_command_is_a_caller_error_not_a_send() -> None:
 
 
 def test_harness_and_rig_talk_over_a_virtual_bus() -> None:
-    config = CanConfig(channel=f"io-{uuid.uuid4().hex}")
-    with open_bus(config) as harness_bus, open_bus(config) as rig_bus:
-        hw, hr = HarnessWriter(harness_bus, PROTOCOL), HarnessReader(harness_bus, PROTOCOL, config)
-        rw, rr = RigWriter(rig_bus, PROTOCOL), RigReader(rig_bus, PROTOCOL, config)
+    channel = f"io-{uuid.uuid4().hex}"
+    with open_bus("virtual", channel) as harness_bus, open_bus("virtual", channel) as rig_bus:
+        hw, hr = HarnessWriter(harness_bus, PROTOCOL), HarnessReader(harness_bus, PROTOCOL)
+        rw, rr = RigWriter(rig_bus, PROTOCOL), RigReader(rig_bus, PROTOCOL)
         assert rw.table(0.1, -0.2, 3.0, 0.0) and rw.base(0.05, 0.01, -1.0, 0.0)
         assert rw.drifts(0.001, -0.002, 0.003, 0.0) and rw.accels(1.5, -2.5, 3.5, 0.0)
-        assert rw.actuator_status(-1234.0, 2, True, 0, 0.0)
+        assert rw.actuator_status(-1234.0, DriveState.ENABLED, True, FaultCode.NONE, 0.0)
         assert rw.rig_status(True, True, False, 12.3456, (1 << 24) + 7, 0.0)
         assert hw.command(2500.0, True, 0.0) and hw.heartbeat(3, 0.0)
-        assert hw.rig_control(1, True, 0.0, fault_id=2, fault_param=0.004)
+        assert hw.rig_control(RigCommand.START_TABLE, True, 0.0, fault_id=2, fault_param=0.004)
         assert _drain(hr, 6) == 6 and _drain(rr, 3) == 3
         assert hr.sample("STORY_DRIFTS").values == pytest.approx([0.001, -0.002, 0.003])
         assert hr.sample("FLOOR_ACCELS").values == pytest.approx([1.5, -2.5, 3.5])
         assert hr.status.values == pytest.approx([2.0, 1.0, 0.0, -1234.0])
         assert (hr.drive_state, hr.pressure_ok, hr.fault_code, hr.measured_force_n) == (2, True, 0, -1234.0)
+        assert hr.drive_ready and not hr.drive_fault
         assert hr.sample("RIG_STATUS").values == pytest.approx([1.0, 1.0, 0.0, 12.3456, 7.0])
         assert rr.command.values == [1.0, 2500.0] and rr.heartbeat.values == [3.0]
         assert rr.control.values == pytest.approx([1.0, 1.0, 2.0, 0.004], rel=1e-6)
@@ -351,10 +353,11 @@ def test_harness_and_rig_talk_over_a_virtual_bus() -> None:
 
 
 def test_links_open_both_sides_and_close_idempotently() -> None:
-    config = CanConfig(channel=f"link-{uuid.uuid4().hex}")
-    with open_harness(config) as harness, open_rig(config) as rig:
+    channel = f"link-{uuid.uuid4().hex}"
+    with open_harness("virtual", channel, 1_000_000, RATES_HZ) as harness, \
+            open_rig("virtual", channel, 1_000_000, RATES_HZ) as rig:
         assert harness.reader.health is harness.health and harness.writer.health is harness.health
-        assert 0 < harness.load.share <= config.max_bus_load
+        assert 0 < harness.load.share <= 0.5
         assert rig.writer.table(0.003, 0.0, 0.0, now=0.0)
         assert harness.writer.command(-50.0, False, now=0.0)
         assert _drain(harness.reader, 1) == 1 and _drain(rig.reader, 1) == 1

@@ -15,19 +15,18 @@ import uuid
 import pytest
 
 from drivers.codec import load_protocol
-from drivers.config import CanConfig
 from drivers.e2e import protect
-from drivers.link import open_harness, open_rig
+from drivers.protocol_values import DriveState, EstopSource, FaultCode
+from harness.can_config import CanConfig
+from harness.can_link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile
 from harness.safety.config import CommsConfig, SafetyConfig
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import Supervisor
-from harness.control.factory import build_controller_for_rig
 
 PERIOD_S = 0.002
-DRIVE_READY, DRIVE_ENABLED = 1, 2
 
 
 class FixedForce:
@@ -77,9 +76,9 @@ class Bench:
             w.table(noise_m, 10.0 * noise_m, 0.0, self.t)  # velocity moves by 1 LSB too (sensor_stuck)
             w.base(self.x_b + noise_m, self.v_b + 10.0 * noise_m, 0.0, self.t)  # 1 LSB of ydot_b
         if self.publish_panel:
-            w.estop(False, self.t, source=3)
-        w.actuator_status(self.supervisor.command.force_N, DRIVE_ENABLED if self.supervisor.command.enable else DRIVE_READY,
-                          True, 0, self.t)
+            w.estop(False, self.t, source=EstopSource.PANEL)
+        w.actuator_status(self.supervisor.command.force_N, DriveState.ENABLED if self.supervisor.command.enable else DriveState.READY,
+                          True, FaultCode.NONE, self.t)
 
     def step(self):
         """Publish, run one tick, and return the ACTUATOR_CMD (enable, force_N) the rig received for it."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from drivers.measurements import Measurements
 from harness.control.controllers import PhiSMC, StateFeedbackSMC
 from harness.control.designs import (
     FullStateDesign,
@@ -19,7 +20,6 @@ from harness.control.designs import (
 from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups, regular_form, sliding_poles
 from harness.errors import ModelError
 from harness.model.building import state_space
-from harness.signals import Measurements
 
 
 def test_regular_form_isolates_the_force():

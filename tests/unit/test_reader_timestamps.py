@@ -8,8 +8,8 @@ import uuid
 
 import can
 
-from drivers.config import CanConfig
-from drivers.link import open_harness, open_rig
+from harness.can_config import CanConfig
+from harness.can_link import open_harness, open_rig
 
 
 def _pair():
@@ -48,7 +48,7 @@ def test_a_frame_stamped_in_the_future_has_no_valid_age():
     codec = protocol["TABLE_SENSORS"]
     future = can.Message(arbitration_id=codec.frame_id, data=codec.encode([0.0, 0.0, 0.0], 0), is_extended_id=False,
                          timestamp=time.time() + 3600.0)
-    reader = HarnessReader(StubBus([future]), protocol, CanConfig(timestamp_source="message"))
+    reader = HarnessReader(StubBus([future]), protocol, use_msg_timestamp=True)
     reader.poll(1.0)
     assert reader.table.count == 1
     assert math.isnan(reader.table.age(1.0))  # NaN fails every 0 <= age <= max check

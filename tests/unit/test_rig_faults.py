@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from drivers.protocol_values import DriveState, FaultCode
 from harness.errors import ProfileError
-from harness.rig import drive as D
+from harness.rig.drive import Drive
 from harness.rig import faults as F
 from harness.rig.config import FaultSpec, RigConfig
 from harness.rig.faults import FaultError, FaultSet, decode_fault_id, fault_id_for, schedule_from
@@ -107,47 +108,47 @@ def test_fault_spec_in_a_profile_is_checked():
 
 
 def test_drive_goes_ready_enabled_and_back():
-    drive = D.Drive(0.05)
-    assert drive.update(0.0, True) == D.OFF, "no heartbeat yet"
+    drive = Drive(0.05)
+    assert drive.update(0.0, True) == DriveState.OFF, "no heartbeat yet"
     drive.on_heartbeat(0.0)
-    assert drive.update(0.01, True) == D.READY
+    assert drive.update(0.01, True) == DriveState.READY
     drive.on_command(True, 100.0, 0.02)
-    assert drive.state == D.ENABLED and drive.enabled
+    assert drive.state == DriveState.ENABLED and drive.enabled
     drive.on_command(False, 0.0, 0.03)
-    assert drive.state == D.READY
+    assert drive.state == DriveState.READY
 
 
 def test_drive_watchdog_trips_when_commands_stop_and_latches():
-    drive = D.Drive(0.05)
+    drive = Drive(0.05)
     drive.on_heartbeat(0.0)
     drive.update(0.0, True)
     drive.on_command(True, 10.0, 0.0)
     for k in range(1, 10):  # heartbeats keep coming, commands stopped at t = 0
         drive.on_heartbeat(0.01 * k)
-        assert drive.update(0.01 * k, True) == (D.ENABLED if 0.01 * k <= 0.05 else D.FAULT)
-    assert drive.fault_code == D.FAULT_COMMAND_WATCHDOG
+        assert drive.update(0.01 * k, True) == (DriveState.ENABLED if 0.01 * k <= 0.05 else DriveState.FAULT)
+    assert drive.fault_code == FaultCode.COMMAND_WATCHDOG
     drive.on_heartbeat(1.0)
     drive.on_command(True, 10.0, 1.0)
-    assert drive.update(1.0, True) == D.FAULT, "latched until reset"
+    assert drive.update(1.0, True) == DriveState.FAULT, "latched until reset"
     drive.reset()
-    assert drive.state == D.OFF and drive.fault_code == 0
+    assert drive.state == DriveState.OFF and drive.fault_code == FaultCode.NONE
 
 
 def test_drive_heartbeat_loss_pressure_loss_injected_fault_and_estop():
-    def ready(drive: D.Drive) -> D.Drive:
+    def ready(drive: Drive) -> Drive:
         drive.on_heartbeat(0.0)
         drive.update(0.0, True)
         return drive
 
-    drive = ready(D.Drive(0.05))
-    assert drive.update(0.06, True) == D.FAULT and drive.fault_code == D.FAULT_HEARTBEAT_WATCHDOG
-    drive = ready(D.Drive(0.05))
-    assert drive.update(0.01, False) == D.FAULT and drive.fault_code == D.FAULT_PRESSURE
-    drive = ready(D.Drive(0.05))
-    assert drive.update(0.01, True, injected_code=42) == D.FAULT and drive.fault_code == 42
-    drive = ready(D.Drive(0.05))
+    drive = ready(Drive(0.05))
+    assert drive.update(0.06, True) == DriveState.FAULT and drive.fault_code == FaultCode.HEARTBEAT_WATCHDOG
+    drive = ready(Drive(0.05))
+    assert drive.update(0.01, False) == DriveState.FAULT and drive.fault_code == FaultCode.PRESSURE_LOST
+    drive = ready(Drive(0.05))
+    assert drive.update(0.01, True, injected_code=42) == DriveState.FAULT and drive.fault_code == 42
+    drive = ready(Drive(0.05))
     drive.on_estop()
-    assert drive.update(0.01, True) == D.ESTOP and drive.fault_code == D.FAULT_ESTOP
+    assert drive.update(0.01, True) == DriveState.ESTOP and drive.fault_code == FaultCode.ESTOP
 
 
 def test_the_shipped_profile_has_a_usable_rig_section():

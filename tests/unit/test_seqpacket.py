@@ -28,11 +28,11 @@ import pytest
 import drivers  # noqa: F401  registers the interface
 from drivers import seqpacket
 from drivers.bus import is_queue_full
+from drivers.errors import BusError
 from drivers.seqpacket import (
     ABSTRACT_PREFIX, ACCEPT_CHECK_INTERVAL_S, BYTES_PER_QUEUED_FRAME, SOCKET_BUFFER_BYTES,
     WANTED_BACKLOG_FRAMES, SeqPacketBus, parse_channel,
 )
-from harness.errors import BusError
 
 REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
@@ -645,9 +645,8 @@ def test_entry_point_is_installed() -> None:
 
 def test_open_bus_opens_seqpacket(channel: str) -> None:
     from drivers.bus import open_bus
-    from drivers.config import CanConfig
 
-    bus = open_bus(CanConfig(interface="seqpacket", channel=channel))
+    bus = open_bus("seqpacket", channel)
     try:
         assert isinstance(bus, SeqPacketBus) and bus.channel == channel
     finally:

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import pytest
 
+from drivers.protocol_values import RigCommand
 from harness.loop.config import LoopConfig
 from harness.loop.runner import TABLE_START_TIMEOUT_S, ControlLoop
-from harness.loop.table_link import RIG_START, RIG_STOP, CanTableLink
+from harness.loop.table_link import CanTableLink
 from harness.profile import load_profile
 from harness.safety.lifecycle import State
 from tests.unit.test_control_tick import Bench
@@ -26,10 +27,10 @@ def test_the_link_sends_start_and_stop_and_reads_running(bench):
     control = bench.rig.reader.control
     link.start(0.0)
     bench.rig.reader.poll(0.0)
-    assert control.values[control.index("command")] == RIG_START
+    assert control.values[control.index("command")] == RigCommand.START_TABLE
     assert link.stop(0.01)
     bench.rig.reader.poll(0.01)
-    assert control.values[control.index("command")] == RIG_STOP and (link.starts, link.stops) == (1, 1)
+    assert control.values[control.index("command")] == RigCommand.STOP_TABLE and (link.starts, link.stops) == (1, 1)
     assert not link.running()
     bench.rig.writer.rig_status(True, False, False, 0.0, 0, 0.02)
     bench.tick.reader.poll(0.02)

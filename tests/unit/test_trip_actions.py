@@ -14,7 +14,8 @@ import pytest
 
 from drivers.busload import bus_load, frame_bits
 from drivers.codec import load_protocol
-from drivers.config import CanConfig
+from drivers.protocol_values import EstopSource, RigCommand
+from harness.can_config import CanConfig
 from harness.errors import ProfileError
 from harness.loop.trip_outputs import SUPERVISOR_SOURCE
 from harness.profile import load_profile
@@ -27,7 +28,7 @@ PROTOCOL = load_protocol()
 ESTOP_ID = PROTOCOL["ESTOP"].frame_id
 CMD_ID = PROTOCOL["ACTUATOR_CMD"].frame_id
 CTRL_ID = PROTOCOL["RIG_CONTROL"].frame_id
-STOP_TABLE = 2
+STOP_TABLE = RigCommand.STOP_TABLE
 SAFETY = load_profile(None).safety
 
 
@@ -212,7 +213,7 @@ def test_only_the_panels_own_frames_keep_it_alive(benches):
         b.step()
     assert b.tick.reader.counters.panel_frames == 0
     assert math.isinf(b.tick.health.estop_panel_age_s)
-    b.rig.writer.estop(False, b.t, source=3)
+    b.rig.writer.estop(False, b.t, source=EstopSource.PANEL)
     b.step()
     assert b.tick.reader.counters.panel_frames == 1
     assert b.tick.health.estop_panel_age_s == pytest.approx(0.0, abs=PERIOD_S)

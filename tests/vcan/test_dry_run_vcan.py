@@ -17,6 +17,7 @@ from pathlib import Path
 import can
 import pytest
 
+from drivers.protocol_values import DriveState
 from harness import exit_codes
 from harness.record import load_run
 
@@ -27,7 +28,7 @@ HARNESS = [sys.executable, "-m", "harness.cli"]
 # Inside User-Mode Linux both processes share one slow virtual CPU and stalls of tens of
 # milliseconds are normal; the rig's drive watchdog gets 0.5 s there (behaviour, not timing).
 SLOW_HOST = ["--set", "rig.drive.watchdog_timeout_s=0.5"]
-DRIVE_ENABLED = 2
+
 #: The real-time dry run inside User-Mode Linux: 100 Hz, and a consistent slow-host set of bounds.
 #: UML stalls both processes for 30-80 ms at times (one slow virtual CPU, syscalls of tens of us).
 #: The stall budget and the sensor age may grow only together with the stroke look-ahead that
@@ -118,7 +119,7 @@ def test_harness_killed_mid_run_leaves_a_readable_folder_and_the_drive_disabled(
         finally:
             listener.shutdown()
         assert states, "the rig sent no actuator status after the harness died"
-        assert states[-1][1] != DRIVE_ENABLED  # the drive-side watchdog disabled the drive
+        assert states[-1][1] != DriveState.ENABLED  # the drive-side watchdog disabled the drive
         assert rig.poll() is None  # the rig itself is still up
     finally:
         if harness.poll() is None:

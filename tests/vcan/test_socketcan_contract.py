@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.config import CanConfig
-from tests.unit.test_bus_contract import BusContract
+from tests.unit.test_bus_contract import BusContract, Channel
 
 pytestmark = pytest.mark.vcan
 
@@ -18,9 +17,9 @@ class TestSocketcanContract(BusContract):
     """The contract on the kernel's SocketCAN ``vcan0``."""
 
     @pytest.fixture
-    def config(self, vcan_channel: str) -> CanConfig:
-        return CanConfig(interface="socketcan", channel=vcan_channel)
+    def config(self, vcan_channel: str) -> Channel:
+        return Channel("socketcan", vcan_channel)
 
     @pytest.fixture
-    def nonexistent(self, vcan_channel: str) -> tuple[CanConfig, str]:
-        return CanConfig(interface="socketcan", channel="vcan_nonexist"), r"ip link add dev vcan_nonexist type vcan"
+    def nonexistent(self, vcan_channel: str) -> tuple[Channel, str]:
+        return Channel("socketcan", "vcan_nonexist"), r"ip link add dev vcan_nonexist type vcan"

@@ -4,6 +4,10 @@ Defaults fit 500 Hz control on a 1 Mbit/s bus with about 30 % load (see
 :mod:`drivers.busload`). Every periodic message of ``drivers/rig.dbc`` takes its
 rate from one field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
 control) are budgeted at the rate they may burst at.
+
+The section is the harness's (built and checked by :mod:`harness.schema`); the
+drivers never see it. :mod:`harness.can_link` hands its values to the drivers as
+plain arguments (interface, channel, bitrate, rates as a mapping, ...).
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from drivers.protocol_values import CURRENT_PROTOCOL_VERSION
 from harness.schema import quantity
 
 #: DBC message name -> the CanConfig field holding its rate (Hz).
@@ -30,9 +35,6 @@ RATE_FIELDS: dict[str, str] = {
 #: Further senders of a message, each at its own rate (Hz): the ESTOP ID carries the harness's
 #: (or any node's) active stop at ``estop_rate_hz`` and the panel's heartbeat at ``estop_panel_rate_hz``.
 EXTRA_RATE_FIELDS: dict[str, tuple[str, ...]] = {"ESTOP": ("estop_panel_rate_hz",)}
-
-#: The protocol version of the packaged drivers/rig.dbc.
-CURRENT_PROTOCOL_VERSION = 1
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,8 @@
-"""The measured signals that flow from the drivers to the estimator, controller and supervisor.
+"""The decoded control sample: the measured signals the drivers hand to the estimator, controller and supervisor.
 
-One :class:`Measurements` object is allocated before a run and updated in place
+The harness-side reader fills it from TABLE_SENSORS and BASE_SENSORS
+(:meth:`drivers.reader.HarnessReader.fill`); the offline simulation fills it from its
+plant. One :class:`Measurements` object is allocated before a run and updated in place
 every tick, so the tick allocates nothing. All values are SI.
 """
 

@@ -1,0 +1,70 @@
+"""The profile's ``can`` section handed to the drivers: a checked, open CAN link from a :class:`CanConfig`.
+
+The drivers take plain arguments, as ``can.Bus`` does (:mod:`drivers.link`); this
+module is the one place that turns the harness's :class:`~harness.can_config.CanConfig`
+into them. The functions keep the names and the order of checks of the drivers' own
+(:func:`prepare` refuses a configuration before any bus is opened).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from drivers import link
+from drivers.busload import BusLoad
+from drivers.codec import Protocol
+from drivers.link import HarnessLink, RigLink
+from harness.can_config import CanConfig
+
+
+def protocol_arguments(config: CanConfig) -> dict[str, Any]:
+    """What :func:`drivers.link.prepare` takes besides rates and bitrate: allowed load, version, DBC path."""
+    return {
+        "max_bus_load": config.max_bus_load,
+        "protocol_version": config.protocol_version,
+        "dbc_path": config.dbc_path or None,
+    }
+
+
+def link_arguments(config: CanConfig) -> dict[str, Any]:
+    """Keyword arguments of :func:`drivers.link.open_harness` and :func:`drivers.link.open_rig` for ``config``."""
+    return {
+        "interface": config.interface,
+        "channel": config.channel,
+        "bitrate_bps": config.bitrate_bps,
+        "rates_hz": config.rates_hz(),
+        **protocol_arguments(config),
+        "use_msg_timestamp": config.timestamp_source == "message",
+        "max_frames_per_poll": config.max_frames_per_poll,
+    }
+
+
+def prepare(config: CanConfig) -> tuple[Protocol, BusLoad]:
+    """Load the DBC and check version and bus load, without touching the bus.
+
+    Raises
+    ------
+    ProtocolError
+        The DBC is unreadable or its ProtocolVersion differs from ``config.protocol_version``.
+    BusLoadError
+        The configured rates need more than ``config.max_bus_load`` of the bitrate.
+    """
+    return link.prepare(config.rates_hz(), config.bitrate_bps, **protocol_arguments(config))
+
+
+def open_harness(config: CanConfig) -> HarnessLink:
+    """Check the configuration, then open the bus for the harness side.
+
+    Raises
+    ------
+    ProtocolError, BusLoadError
+        From :func:`prepare`, before the bus is opened.
+    BusError
+        The bus cannot be opened (says how to fix it).
+    """
+    return link.open_harness(**link_arguments(config))
+
+
+def open_rig(config: CanConfig) -> RigLink:
+    """Check the configuration, then open the bus for the rig side (the virtual rig); raises as :func:`open_harness`."""
+    return link.open_rig(**link_arguments(config))

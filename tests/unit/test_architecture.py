@@ -1,0 +1,162 @@
+"""The layering of the project, read from the source with :mod:`ast` (nothing is imported).
+
+- ``drivers/`` imports nothing from ``harness/``: the drivers know CAN and units, not the
+  profile, the controller or the supervisor (DESIGN.md, "one direction").
+
+:func:`project_imports` is the reusable part: per module, the project modules it imports,
+imports inside functions and classes included (an import hidden in a function is still a
+dependency). Imports made through ``importlib`` are not seen.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterable
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+PACKAGES = ("drivers", "harness")
+
+
+def module_name(path: Path, root: Path) -> str:
+    """Dotted module name of the source file ``path`` under ``root`` (``drivers/__init__.py`` -> ``drivers``)."""
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def project_modules(root: Path, packages: Iterable[str] = PACKAGES) -> dict[str, Path]:
+    """Every module of the given top-level packages under ``root``: dotted name -> source file."""
+    modules = {}
+    for package in packages:
+        for path in sorted((root / package).rglob("*.py")):
+            modules[module_name(path, root)] = path
+    return modules
+
+
+def _is_type_checking_block(node: ast.AST) -> bool:
+    """True for ``if TYPE_CHECKING:`` and ``if typing.TYPE_CHECKING:``."""
+    if not isinstance(node, ast.If):
+        return False
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _import_nodes(tree: ast.AST, type_checking: bool) -> Iterable[ast.Import | ast.ImportFrom]:
+    """Every import statement at any depth (functions, classes, try/if blocks included)."""
+    stack: list[ast.AST] = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            yield node
+        elif not type_checking and _is_type_checking_block(node):
+            stack.extend(node.orelse)  # type: ignore[attr-defined]
+        else:
+            stack.extend(ast.iter_child_nodes(node))
+
+
+def _absolute(node: ast.ImportFrom, importer: str, is_package: bool) -> str:
+    """The absolute module a ``from ... import`` names (resolving ``from . import x`` and ``from ..a import b``)."""
+    if not node.level:
+        return node.module or ""
+    package = importer.split(".") if is_package else importer.split(".")[:-1]
+    base = package[: len(package) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _known(name: str, modules: dict[str, Path]) -> str:
+    """The deepest project module that ``name`` is or lies in (``harness.errors.BusError`` -> ``harness.errors``)."""
+    parts = name.split(".")
+    for end in range(len(parts), 0, -1):
+        candidate = ".".join(parts[:end])
+        if candidate in modules:
+            return candidate
+    return name
+
+
+def imported_names(path: Path, importer: str, *, type_checking: bool = True) -> set[str]:
+    """Absolute dotted names of everything ``path`` imports: modules, and ``module.name`` for from-imports."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    is_package = path.name == "__init__.py"
+    names = set()
+    for node in _import_nodes(tree, type_checking):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        else:
+            module = _absolute(node, importer, is_package)
+            names.add(module)
+            names.update(f"{module}.{alias.name}" for alias in node.names if alias.name != "*")
+    return names
+
+
+def project_imports(
+    root: Path = REPO, packages: Iterable[str] = PACKAGES, *, type_checking: bool = True
+) -> dict[str, set[str]]:
+    """Per project module, the project modules it imports, at any nesting level.
+
+    Parameters
+    ----------
+    root : Path
+        The checkout (the directory holding the packages).
+    packages : iterable of str
+        Top-level packages that make up the project.
+    type_checking : bool
+        Count imports under ``if TYPE_CHECKING:`` too (they name a dependency, though not one
+        made at run time; leave them out for a check of import cycles at run time).
+
+    Returns
+    -------
+    dict of str to set of str
+        Module name -> names of the project modules it imports (its own name excluded). A
+        from-import counts the module it imports from, and the submodule when the imported
+        name is one (``from drivers import seqpacket`` -> ``drivers``, ``drivers.seqpacket``).
+    """
+    packages = tuple(packages)
+    modules = project_modules(root, packages)
+    graph = {}
+    for name, path in modules.items():
+        found = {_known(imported, modules) for imported in imported_names(path, name, type_checking=type_checking)}
+        graph[name] = {dep for dep in found if dep.split(".")[0] in packages and dep != name}
+    return graph
+
+
+# --- the rules ------------------------------------------------------------------------------
+
+
+def test_drivers_import_nothing_from_harness() -> None:
+    graph = project_imports()
+    assert any(name.startswith("drivers.") for name in graph), "no driver modules found"
+    offenders = {
+        module: sorted(dep for dep in deps if dep.split(".")[0] == "harness")
+        for module, deps in graph.items()
+        if module.split(".")[0] == "drivers"
+    }
+    offenders = {module: deps for module, deps in offenders.items() if deps}
+    assert not offenders, f"drivers must not import harness; found: {offenders}"
+
+
+# --- the helper itself ----------------------------------------------------------------------
+
+
+def test_import_walker_sees_nested_relative_and_type_checking_imports(tmp_path: Path) -> None:
+    (tmp_path / "low").mkdir()
+    (tmp_path / "low" / "__init__.py").write_text("from . import leaf\n")
+    (tmp_path / "low" / "leaf.py").write_text(
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n    from high.types import Thing\n"
+        "def late():\n    import high.deep as deep\n    return deep\n"
+        "class Kind:\n    def method(self):\n        from ..high import config\n"
+    )
+    (tmp_path / "high").mkdir()
+    (tmp_path / "high" / "__init__.py").write_text("")
+    for name in ("types", "deep", "config"):
+        (tmp_path / "high" / f"{name}.py").write_text("import os\nfrom low.leaf import late\n")
+    graph = project_imports(tmp_path, ("low", "high"))
+    assert graph["low"] == {"low.leaf"}
+    assert graph["low.leaf"] == {"high", "high.types", "high.deep", "high.config"}
+    assert graph["high.deep"] == {"low.leaf"}, "stdlib imports are not project modules"
+    at_run_time = project_imports(tmp_path, ("low", "high"), type_checking=False)
+    assert at_run_time["low.leaf"] == {"high", "high.deep", "high.config"}
