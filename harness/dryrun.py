@@ -15,6 +15,7 @@ simulated offline.
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import subprocess
 import sys
@@ -22,16 +23,18 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from drivers.protocol_values import RigCommand
 from harness.errors import BusError
 from harness.loop.table_link import CanTableLink
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
+from harness.peaks import flatten
 from harness.profile import Profile
 from harness.record import load_run
 from harness.session import SessionResult, SessionSettings, run_peaks, run_session
 from harness.simulation import CaseResult, SamplingSettings, run_case
 from harness.control.factory import make_controller
-from harness.study import StudyOptions, motion_facts, prepare_motion
+from harness.study import StudyOptions, motion_facts, prepare_motion, resolve_profile
 from harness.twin import run_rig_twin
 
 #: The python-can interface (drivers/seqpacket.py) of the default dry run: the rig runs in its own
@@ -47,14 +50,12 @@ class DryRunOptions:
     """The command line's choices for a dry run."""
 
     study: StudyOptions = StudyOptions()
-    rate_hz: float | None = None
     interface: str | None = None
     channel: str | None = None
     log_dir: str | None = None
     lockstep: bool = False
     external_rig: bool = False
     show_console: bool = True
-    overrides: tuple[str, ...] = ()
     compare: bool = True
 
 
@@ -63,33 +64,37 @@ class DryRunResult:
     """The session and the simulated twins it is compared with."""
 
     session: SessionResult
+    profile: Profile  # resolved: every option folded in
     peaks: dict
     passive: CaseResult | None
     twin: CaseResult | None
     motion: object
     span_s: float | None = None  # record time covered by a run that ended early (s); None: the whole record
 
+    def largest_twin_difference(self) -> tuple[str, float]:
+        """The peak that differs most from the simulated twin's, and by how much (% of the twin's)."""
+        ours, twin = flatten(self.peaks), flatten(self.twin.peaks)
+        worst = max(twin, key=lambda k: abs(ours[k] - twin[k]) / abs(twin[k]) if twin[k] else 0.0)
+        difference = abs(ours[worst] - twin[worst]) / abs(twin[worst]) * 100 if twin[worst] else 0.0
+        return worst, difference
 
-def _rig_process(profile: Profile, options: DryRunOptions, can, rate_hz: float) -> subprocess.Popen:
-    study = options.study
-    args = [sys.executable, "-m", "harness.cli", "rig", profile.source_path, "--interface", can.interface,
-            "--channel", can.channel, "--rate", str(rate_hz)]
-    for flag, value in (("--record", study.record), ("--records-dir", study.records_dir), ("--pga", study.pga_g),
-                        ("--time-scale", study.time_scale), ("--duration", study.duration_s)):
-        if value is not None:
-            args += [flag, str(value)]
-    if profile.variant:
-        args += ["--variant", profile.variant]
-    for item in options.overrides:  # the rig must run the same profile as the harness
-        args += ["--set", item]
-    if profile.safety_weakened:  # acknowledged already (harness/cli.py refuses it otherwise)
-        args.append("--allow-weaker-safety")
-    if options.lockstep:
-        args.append("--lockstep")
-    args += ["--parent-pid", str(os.getpid())]
+
+def _rig_process(profile: Profile, can, lockstep: bool) -> subprocess.Popen:
+    """Start the virtual rig in its own process, serving the resolved ``profile`` on ``can``.
+
+    The rig gets the profile this dry run resolved (``--set``, ``--variant`` and every
+    option folded in) as a JSON document on its standard input: it parses no options
+    of its own, so it cannot run a different profile from the loop's.
+    """
+    job = {"profile": profile.resolved_data(), "interface": can.interface, "channel": can.channel,
+           "lockstep": lockstep, "parent_pid": os.getpid()}
     # Its own session: the terminal's Ctrl-C goes to the loop, which stops safely, not to the rig.
-    return subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                            start_new_session=True)
+    process = subprocess.Popen([sys.executable, "-m", "harness.rig.process"], stdin=subprocess.PIPE,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    assert process.stdin is not None
+    process.stdin.write(json.dumps(job).encode())
+    process.stdin.close()
+    return process
 
 
 class RigCoordinator:
@@ -140,7 +145,7 @@ class RigCoordinator:
         self._poll_until(lambda: status.count > 0, self.appear_timeout_s, "no RIG_STATUS frame from a virtual rig")
         if self.lockstep:
             seen = status.count
-            link.writer.rig_control(0, True, 0.0)
+            link.writer.rig_control(RigCommand.NONE, True, 0.0)
             self._poll_until(lambda: status.count > seen, 5.0, "the rig did not answer the switch to lockstep")
             self.base_step = int(status.values[status.index("step_index")])
 
@@ -200,17 +205,18 @@ def record_span_s(session: SessionResult, motion) -> float | None:
 
 def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timing=None) -> DryRunResult:
     """Run a dry run; see the module docstring."""
-    from drivers.link import open_rig
+    from harness.can_link import open_rig
     from harness.rig import VirtualRig
 
     warm_up()  # compile the kernels now, never inside the loop or the rig
-    motion = prepare_motion(profile, options.study)
-    rate_hz = options.rate_hz or profile.loop.rate_hz
-    can = profile.can_settings(options.interface, options.channel, rate_hz)
+    profile = resolve_profile(profile, options.study)
+    motion = prepare_motion(profile)
+    rate_hz = profile.control.rate_hz
+    can = profile.can_settings(options.interface, options.channel)
     if can.interface == PRIVATE_BUS_INTERFACE and not options.external_rig:
         # a private bus per dry run: two dry runs at once (or a test suite) never meet
         can = dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}")
-    controller = options.study.controller or profile.control.controller
+    controller = profile.control.controller
     settings = SessionSettings(
         kind="dry-run", can=can, rate_hz=rate_hz, duration_s=motion.duration_s, controller=controller,
         log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
@@ -228,7 +234,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
             rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=options.lockstep, can_config=can)
             rig.start_thread()
         elif not options.external_rig:
-            process = _rig_process(profile, options, can, rate_hz)
+            process = _rig_process(profile, can, options.lockstep)
         coordinator = RigCoordinator(options.lockstep, 1.0 / rate_hz, process)
         session = run_session(
             profile, settings, on_start=coordinator.table.start,
@@ -249,7 +255,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     span = record_span_s(session, motion)
     if options.compare:
         passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep, span)
-    return DryRunResult(session, peaks, passive, twin, motion, span)
+    return DryRunResult(session, profile, peaks, passive, twin, motion, span)
 
 
 def _stop_process(process: subprocess.Popen) -> None:

@@ -35,7 +35,7 @@ from typing import Any
 
 import yaml
 
-from drivers.config import CanConfig
+from harness.can_config import CanConfig
 from harness.control.config import ControlConfig, SimulationConfig
 from harness.errors import ProfileError
 from harness.loop.config import LoopConfig
@@ -80,6 +80,11 @@ class Profile:
         problems = check_config(self.safety)
         if problems:
             raise ValueError("inconsistent safety limits: " + "; ".join(problems))
+        if self.control.rate_hz != self.loop.rate_hz:
+            raise ValueError(
+                f"control.rate_hz is {self.control.rate_hz:g} Hz but loop.rate_hz is {self.loop.rate_hz:g} Hz; "
+                "the controller samples once per tick of the loop, so they must be equal"
+            )
         if self.loop.rate_hz != self.can.command_rate_hz:
             raise ValueError(
                 f"loop.rate_hz is {self.loop.rate_hz:g} Hz but can.command_rate_hz is {self.can.command_rate_hz:g} Hz; "
@@ -110,13 +115,26 @@ class Profile:
         return dataclasses.replace(self.can, **changes) if changes else self.can
 
     def resolved_data(self) -> dict:
-        """The fully resolved profile as plain data (SI), for run folders."""
+        """The fully resolved profile as plain data (SI), for run folders and the rig process."""
         data = to_data(self)
         data.pop("variants", None)
         data["loaded_from"] = self.source_path
         if self.variant:
             data["variant"] = self.variant
         return data
+
+    @classmethod
+    def from_resolved(cls, data: Mapping[str, Any]) -> Profile:
+        """The profile :meth:`resolved_data` wrote, validated again (``harness dry-run`` hands it to its rig).
+
+        The safety acknowledgement is not carried: the command that resolved the profile
+        has checked it already.
+        """
+        data = dict(data)
+        source = str(data.pop("loaded_from", ""))
+        variant = str(data.pop("variant", ""))
+        profile = _build_checked(data, f"{source} (resolved)")
+        return dataclasses.replace(profile, source_path=source, variant=variant)
 
 
 def _read_yaml(path: Path) -> dict:

@@ -7,13 +7,15 @@ sampling settings, and the results in the JSON layout of the issue tracker (SI).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness.control.factory import build_controller_for_rig, make_controller
+from harness.control.factory import build_controller_for_rig, make_controller, require_design
 from harness.control.estimator import FrictionEstimator
+from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
 from harness.profile import Profile
 from harness.records import check_table_limits, load_motion
@@ -87,30 +89,80 @@ def motion_facts(motion) -> dict:
     }
 
 
-def prepare_motion(profile: Profile, options: StudyOptions):
-    """The processed table motion for ``profile`` with the overrides, checked against the table."""
-    motion = load_motion(
-        profile.record,
-        base_dir=profile.base_dir,
-        records_dir_flag=options.records_dir,
-        name=options.record,
-        pga_g=options.pga_g,
-        time_scale=options.time_scale,
-        duration_s=options.duration_s,
+def resolve_profile(profile: Profile, options: StudyOptions) -> Profile:
+    """The profile with the command line's options folded in: the one place they are resolved.
+
+    Every option that has a profile key becomes that key's value, so everything downstream
+    (the simulator, the loop, the virtual rig in its own process) reads one frozen profile
+    and nothing looks at the options again:
+
+    - ``record``, ``records_dir`` (resolved with ``$HARNESS_RECORDS_DIR`` and made absolute,
+      like a record given as a relative path), ``pga_g``, ``time_scale``, ``duration_s``
+      go to the ``record`` section;
+    - ``controller`` (unless ``none``), ``friction``, ``transport_delay_s`` and
+      ``design_stiffness_scale`` to ``control``;
+    - ``rate_hz`` to ``control.rate_hz``, ``loop.rate_hz`` and the CAN command and sensor
+      rates, which must agree (the profile checks it).
+
+    Parameters
+    ----------
+    profile : Profile
+    options : StudyOptions
+
+    Returns
+    -------
+    Profile
+        Validated like a loaded profile (its ``__post_init__`` checks run again).
+    """
+    from harness.records import records_dir_from
+    from harness.records.config import resolve_record_name
+
+    record = profile.record
+    name = options.record if options.record is not None else record.name
+    name = resolve_record_name(name, Path.cwd() if options.record is not None else profile.base_dir)
+    records_dir = records_dir_from(options.records_dir, record.records_dir, base_dir=profile.base_dir)
+    record = dataclasses.replace(
+        record, name=name, records_dir=None if records_dir is None else str(Path(records_dir).resolve()),
+        **_given(pga_g=options.pga_g, time_scale=options.time_scale, duration_s=options.duration_s),
     )
+    if options.controller not in (None, NO_CONTROLLER):
+        require_design(profile, options.controller)
+    control = dataclasses.replace(profile.control, **_given(
+        controller=None if options.controller == NO_CONTROLLER else options.controller,
+        rate_hz=options.rate_hz, friction=options.friction, transport_delay_s=options.transport_delay_s,
+        design_stiffness_scale=options.design_stiffness_scale,
+    ))
+    changes: dict = {"record": record, "control": control}
+    if options.rate_hz is not None:
+        changes["loop"] = dataclasses.replace(profile.loop, rate_hz=options.rate_hz)
+        changes["can"] = profile.can_settings(rate_hz=options.rate_hz)
+    try:
+        return dataclasses.replace(profile, **changes)
+    except ValueError as err:  # a combination the profile refuses, as it would from the file
+        raise ProfileError(f"{err} (with the command line's options)", profile.source_path) from err
+
+
+def _given(**values) -> dict:
+    """The items whose value is not None."""
+    return {key: value for key, value in values.items() if value is not None}
+
+
+def prepare_motion(profile: Profile, options: StudyOptions | None = None):
+    """The processed table motion of ``profile`` (with ``options`` folded in), checked against the table."""
+    if options is not None:
+        profile = resolve_profile(profile, options)
+    record = profile.record
+    motion = load_motion(record, base_dir=profile.base_dir, records_dir_flag=record.records_dir)
     if profile.table is not None:
         check_table_limits(motion, profile.table)
     return motion
 
 
-def sampling_settings(profile: Profile, options: StudyOptions) -> SamplingSettings:
-    """Controller sampling from the profile with the overrides."""
+def sampling_settings(profile: Profile) -> SamplingSettings:
+    """Controller sampling of a resolved profile."""
     control = profile.control
-    return SamplingSettings(
-        rate_hz=options.rate_hz or control.rate_hz,
-        transport_delay_s=control.transport_delay_s if options.transport_delay_s is None else options.transport_delay_s,
-        friction_source=options.friction or control.friction,
-    )
+    return SamplingSettings(rate_hz=control.rate_hz, transport_delay_s=control.transport_delay_s,
+                            friction_source=control.friction)
 
 
 def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, float], None] | None = None) -> StudyResult:
@@ -123,10 +175,11 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     progress : callable, optional
         ``progress(case_name, fraction)``.
     """
-    motion = prepare_motion(profile, options)
-    settings = sampling_settings(profile, options)
-    scale = options.design_stiffness_scale or profile.control.design_stiffness_scale
-    name = options.controller or profile.control.controller
+    profile = resolve_profile(profile, options)
+    motion = prepare_motion(profile)
+    settings = sampling_settings(profile)
+    scale = profile.control.design_stiffness_scale
+    name = NO_CONTROLLER if options.controller == NO_CONTROLLER else profile.control.controller
     controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
     table = TableMotion.from_motion(motion)
     plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)

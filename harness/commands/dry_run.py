@@ -70,13 +70,12 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.dryrun import DryRunOptions, dry_run
     from harness.peak_table import peak_table
-    from harness.peaks import flatten
 
     profile = load_acknowledged(args, console)
     options = DryRunOptions(
-        study=study_options(args, controller=args.controller), rate_hz=args.rate, interface=args.interface,
+        study=study_options(args, controller=args.controller, rate_hz=args.rate), interface=args.interface,
         channel=args.channel, log_dir=args.log_dir, lockstep=args.lockstep, external_rig=args.external_rig,
-        show_console=not args.quiet, overrides=tuple(args.overrides),
+        show_console=not args.quiet,
     )
     compile_kernels(console)
     result = dry_run(profile, options, console, on_host_timing=print_host_timing(console))
@@ -92,11 +91,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
     if result.span_s is not None:
         title += f", over the {result.span_s:.2f} s of record that ran before the run ended ({session.outcome})"
     console.print(peak_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run")))
-    ours, twin = flatten(result.peaks), flatten(result.twin.peaks)
-    worst = max(twin, key=lambda k: abs(ours[k] - twin[k]) / abs(twin[k]) if twin[k] else 0.0)
-    difference = abs(ours[worst] - twin[worst]) / abs(twin[worst]) * 100 if twin[worst] else 0.0
+    worst, difference_pct = result.largest_twin_difference()
     console.print(f"against `harness simulate --rig-effects` (the rig's models offline): largest peak difference "
-                  f"{difference:.1f} % ({worst})")
-    print_timing(console, session.loop.timing, options.rate_hz or profile.loop.rate_hz)
+                  f"{difference_pct:.1f} % ({worst})")
+    print_timing(console, session.loop.timing, result.profile.control.rate_hz)
     print_outcome(console, session, virtual_rig=not options.external_rig, weakened=profile.safety_weakened)
     return session.exit_code

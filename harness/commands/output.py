@@ -2,31 +2,10 @@
 
 from __future__ import annotations
 
-import contextlib
-import signal
 
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-
-@contextlib.contextmanager
-def stop_on_signals():
-    """Ctrl-C and SIGTERM raise KeyboardInterrupt (a clean stop), even if the shell started
-    this process with SIGINT ignored, as it does for background jobs; the handlers before
-    are put back afterwards (``main`` may run in a longer-lived process)."""
-
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
-    signal.signal(signal.SIGINT, interrupt)
-    signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, before[0])
-        signal.signal(signal.SIGTERM, before[1])
 
 
 def progress_bar(console: Console, enabled: bool):

@@ -17,6 +17,7 @@ from harness.commands.options import (
     non_empty,
     number_in,
     output_file,
+    study_options,
     wrap,
 )
 
@@ -51,7 +52,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
 
     from harness.profile import load_profile
     from harness.records import list_records, records_dir_from, summarize
-    from harness.study import StudyOptions, prepare_motion
+    from harness.study import prepare_motion
 
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     if args.record is None:
@@ -64,9 +65,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         console.print(table)
         console.print("Set the directory with --records-dir, $HARNESS_RECORDS_DIR or the profile's record.records_dir.")
         return exit_codes.OK
-    options = StudyOptions(record=args.record, records_dir=args.records_dir, pga_g=args.pga,
-                           time_scale=args.time_scale, duration_s=args.duration)
-    motion = prepare_motion(profile, options)
+    motion = prepare_motion(profile, study_options(args))
     facts = summarize(motion)
     table = Table(title=f"{motion.name} after processing ({profile.name})", title_justify="left")
     table.add_column("quantity")

@@ -19,7 +19,8 @@ from harness.commands.options import (
     study_options,
     wrap,
 )
-from harness.commands.output import compile_kernels, stop_on_signals
+from harness.commands.output import compile_kernels
+from harness.interrupts import stop_on_signals
 
 
 def add_parser(sub) -> None:
@@ -48,15 +49,14 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace, console: Console) -> int:
-    from harness.rig import run_rig_command
+    from harness.rig.command import serve_rig
+    from harness.study import resolve_profile
 
     with stop_on_signals():
-        load_acknowledged(args, console)  # the rig serves the harness's profile: the same acknowledgement
+        profile = load_acknowledged(args, console)  # the rig serves the harness's profile: the same acknowledgement
+        profile = resolve_profile(profile, study_options(args, rate_hz=args.rate))
+        can_config = profile.can_settings(args.interface, args.channel)
         compile_kernels(console)
-        options = study_options(args, rate_hz=args.rate)
-        console.print(f"virtual rig on {args.interface or 'the profile interface'}:{args.channel or 'the profile channel'}"
+        console.print(f"virtual rig on {can_config.interface}:{can_config.channel}"
                       f"{' (lockstep)' if args.lockstep else ''}; Ctrl-C stops it")
-        return run_rig_command(
-            args.profile, interface=args.interface, channel=args.channel, lockstep=args.lockstep, options=options,
-            seed=args.seed, variant=args.variant, overrides=tuple(args.overrides), parent_pid=args.parent_pid,
-        )
+        return serve_rig(profile, can_config, lockstep=args.lockstep, seed=args.seed, parent_pid=args.parent_pid)

@@ -78,13 +78,14 @@ def run(args: argparse.Namespace, console: Console) -> int:
 
     from harness.dryrun import LOG_DIR
     from harness.session import SessionSettings, run_session
-    from harness.study import motion_facts, prepare_motion
+    from harness.study import motion_facts, prepare_motion, resolve_profile
 
     profile = load_acknowledged(args, console)
-    motion = prepare_motion(profile, study_options(args))
-    rate = args.rate if args.rate is not None else profile.loop.rate_hz
-    can = profile.can_settings(args.interface, args.channel, rate)
-    controller = args.controller or profile.control.controller
+    profile = resolve_profile(profile, study_options(args, controller=args.controller, rate_hz=args.rate))
+    motion = prepare_motion(profile)
+    rate = profile.control.rate_hz
+    can = profile.can_settings(args.interface, args.channel)
+    controller = profile.control.controller
     table_link = _announce_table_link(profile, console)
     if not args.yes:
         try:

@@ -19,6 +19,7 @@ from harness.commands.options import (
     number_in,
     output_dir,
     output_file,
+    study_options,
     wrap,
 )
 from harness.commands.output import progress_bar
@@ -67,13 +68,12 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.peak_table import peak_table
     from harness.profile import load_profile
-    from harness.study import StudyOptions, run_study
+    from harness.study import run_study
 
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
-    options = StudyOptions(
-        record=args.record, records_dir=args.records_dir, pga_g=args.pga, time_scale=args.time_scale,
-        duration_s=args.duration, controller=args.controller, rate_hz=args.rate, friction=args.friction,
-        transport_delay_s=args.delay, design_stiffness_scale=args.design_stiffness_scale, rig_effects=args.rig_effects,
+    options = study_options(
+        args, controller=args.controller, rate_hz=args.rate, friction=args.friction, transport_delay_s=args.delay,
+        design_stiffness_scale=args.design_stiffness_scale, rig_effects=args.rig_effects,
     )
     with progress_bar(console, not args.quiet) as progress:
         tasks: dict[str, int] = {}

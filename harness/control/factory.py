@@ -11,6 +11,23 @@ from harness.errors import ProfileError
 from harness.profile import Profile
 
 
+def require_design(profile: Profile, name: str) -> None:
+    """Refuse a controller name that is not a design of ``profile``.
+
+    Raises
+    ------
+    ProfileError
+        Naming the designs the profile has.
+    """
+    designs = profile.control.designs
+    if name not in designs:
+        raise ProfileError(
+            f"unknown controller {name!r}; this profile has {', '.join(designs)} (or 'none' for passive only)",
+            profile.source_path,
+            "control.designs",
+        )
+
+
 def make_controller(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
     """Build the named design of ``profile`` on its (possibly mis-scaled) design model.
 
@@ -28,12 +45,7 @@ def make_controller(profile: Profile, name: str, design_stiffness_scale: float =
         If the profile has no such design.
     """
     designs = profile.control.designs
-    if name not in designs:
-        raise ProfileError(
-            f"unknown controller {name!r}; this profile has {', '.join(designs)} (or 'none' for passive only)",
-            profile.source_path,
-            "control.designs",
-        )
+    require_design(profile, name)
     design_building = profile.structure
     if design_stiffness_scale != 1.0:
         design_building = design_building.with_stiffness_scale(design_stiffness_scale)

@@ -126,7 +126,7 @@ def load_motion(
     GroundMotion
         Compressed, cut, scaled and baseline-corrected.
     """
-    chosen_name = name if name is not None else _profile_name(config.name, base_dir)
+    chosen_name = name if name is not None else resolve_record_name(config.name, base_dir)
     scale = time_scale if time_scale is not None else config.time_scale
     duration = duration_s if duration_s is not None else config.duration_s
     target = pga_g if pga_g is not None else config.pga_g
@@ -148,8 +148,12 @@ def load_motion(
     return motion
 
 
-def _profile_name(name: str, base_dir: str | Path) -> str:
-    """A profile's record name; a relative path in it is relative to the profile's directory."""
+def resolve_record_name(name: str, base_dir: str | Path) -> str:
+    """A record name, with a relative path in it taken relative to ``base_dir``.
+
+    ``base_dir`` is the profile's directory for the profile's own ``record.name``, and the
+    working directory for ``--record``.
+    """
     path = Path(name).expanduser()
     if synthetic_seed(name) is None and looks_like_path(name) and not path.is_absolute():
         return str(Path(base_dir) / path)

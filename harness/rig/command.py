@@ -2,7 +2,7 @@
 
 The CLI parses the arguments and calls :func:`run_rig_command`; this module does
 the rest: load the profile and record, open the bus (checked by
-:func:`drivers.link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
+:func:`harness.can_link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
 event, then stop cleanly: drive disabled and announced, bus shut down.
 """
 
@@ -14,13 +14,14 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from drivers.link import open_rig
 from harness import exit_codes
-from harness.errors import BusError, HarnessError
-from harness.profile import load_profile
+from harness.can_config import CanConfig
+from harness.can_link import open_rig
+from harness.errors import EXPECTED_ERRORS, BusError
+from harness.profile import Profile, load_profile
 from harness.model.warmup import warm_up
 from harness.rig.virtual_rig import VirtualRig
-from harness.study import StudyOptions, prepare_motion
+from harness.study import StudyOptions, prepare_motion, resolve_profile
 
 
 def run_rig_command(
@@ -74,8 +75,8 @@ def run_rig_command(
     int
         :data:`harness.exit_codes.OK` after a stop by ``stop_event``,
         :data:`~harness.exit_codes.STOPPED` after Ctrl-C. Configuration errors
-        (profile, record, bus) raise :class:`~harness.errors.HarnessError` before
-        anything is sent; the CLI maps them to ``INPUT_ERROR``.
+        (profile, record, bus) raise one of :data:`~harness.errors.EXPECTED_ERRORS`
+        before anything is sent; the CLI maps them to ``INPUT_ERROR``.
 
     Raises
     ------
@@ -83,12 +84,30 @@ def run_rig_command(
         The rig stopped serving on its own (the bus failed), after the clean stop.
     """
     options = options or StudyOptions()
-    profile = load_profile(profile_path, variant, overrides)
+    profile = resolve_profile(load_profile(profile_path, variant, overrides), options)
+    return serve_rig(profile, profile.can_settings(interface, channel), lockstep=lockstep, seed=seed,
+                     stop_event=stop_event, clock=clock, on_ready=on_ready, parent_pid=parent_pid)
+
+
+def serve_rig(
+    profile: Profile,
+    can_config: CanConfig,
+    *,
+    lockstep: bool = False,
+    seed: int | None = None,
+    stop_event: threading.Event | None = None,
+    clock: Callable[[], float] = time.monotonic,
+    on_ready: Callable[[VirtualRig], None] | None = None,
+    parent_pid: int | None = None,
+) -> int:
+    """Serve the virtual rig of a resolved ``profile`` on ``can_config`` until stopped.
+
+    The rig steps at the profile's ``control.rate_hz`` (the harness's tick rate) and plays
+    its ``record`` section. Parameters and return value as :func:`run_rig_command`.
+    """
     warm_up()  # compile the plant's kernel before serving the bus in real time
-    motion = prepare_motion(profile, options)
-    rate_hz = options.rate_hz or profile.loop.rate_hz
-    can_config = profile.can_settings(interface, channel, rate_hz)
-    period = 1.0 / rate_hz
+    motion = prepare_motion(profile)
+    period = 1.0 / profile.control.rate_hz
     stop = stop_event or threading.Event()
     with open_rig(can_config) as link:
         rig = VirtualRig(
@@ -106,7 +125,7 @@ def run_rig_command(
             status = exit_codes.STOPPED
         finally:
             rig.stop()
-    if isinstance(rig.error, (HarnessError, OSError)):
+    if isinstance(rig.error, (*EXPECTED_ERRORS, OSError)):
         raise BusError(f"the virtual rig stopped serving: {rig.error}") from rig.error
     if rig.error is not None:
         raise rig.error

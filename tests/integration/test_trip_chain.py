@@ -10,11 +10,11 @@ import json
 
 import pytest
 
+from drivers.protocol_values import DriveState
 from harness.dryrun import DryRunOptions, dry_run
 from harness.loop.runner import ArmTimeout
 from harness.profile import load_profile
 from harness.record import load_run
-from harness.rig import drive as D
 from harness.rig.virtual_rig import VirtualRig
 from harness.study import StudyOptions
 
@@ -59,7 +59,7 @@ def _dry_run(tmp_path, overrides: tuple[str, ...]):
     profile = load_profile(None, overrides=list(overrides))
     options = DryRunOptions(
         study=StudyOptions(duration_s=3.0), interface="virtual", log_dir=str(tmp_path), lockstep=True,
-        show_console=False, overrides=overrides, compare=False,
+        show_console=False, compare=False,
     )
     return dry_run(profile, options)
 
@@ -69,7 +69,7 @@ def test_a_trip_stops_the_table_and_the_rig_sees_the_estop(tmp_path, watched):
     result = _dry_run(tmp_path, (f"rig.faults=[{fault}]",))
     assert result.session.outcome == "tripped" and result.session.trip_reason == "sensor_jump"
     seen = watched.made[0].seen
-    assert seen["drive_state"] == D.ESTOP, "the servo latched the harness's ESTOP frame"
+    assert seen["drive_state"] == DriveState.ESTOP, "the servo latched the harness's ESTOP frame"
     assert seen["started"] and not seen["running"], "the table was stopped"
     # lockstep: every tick after the trip still steps the rig, so a running table would have moved on
     run = load_run(result.session.run_path)
@@ -85,7 +85,7 @@ def test_with_disable_alone_the_table_runs_on_and_no_estop_reaches_the_drive(tmp
     result = _dry_run(tmp_path, (f"rig.faults=[{fault}]", "safety.trip_actions.sensor=[disable]"))
     assert result.session.outcome == "tripped"
     seen = watched.made[0].seen
-    assert seen["drive_state"] != D.ESTOP and seen["running"]
+    assert seen["drive_state"] != DriveState.ESTOP and seen["running"]
 
 
 def test_an_unplugged_panel_refuses_to_arm(tmp_path, watched):

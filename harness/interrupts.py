@@ -1,0 +1,26 @@
+"""Ctrl-C and SIGTERM as a clean stop, for every process of the harness that runs until stopped."""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+from collections.abc import Iterator
+
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[None]:
+    """Ctrl-C and SIGTERM raise KeyboardInterrupt (a clean stop), even if the shell started
+    this process with SIGINT ignored, as it does for background jobs; the handlers before
+    are put back afterwards (``main`` may run in a longer-lived process)."""
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    signal.signal(signal.SIGINT, interrupt)
+    signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before[0])
+        signal.signal(signal.SIGTERM, before[1])
