@@ -23,7 +23,7 @@ from drivers.errors import BusError, BusLoadError, DriverError, ProtocolError
 
 __all__ = [
     "EXPECTED_ERRORS", "BusError", "BusLoadError", "DriverError", "HarnessError", "ModelError", "ProfileError",
-    "ProtocolError", "RecordError", "SafetyError", "TripError",
+    "ProtocolError", "RecordError", "SafetyError",
 ]
 
 
@@ -70,11 +70,3 @@ class ModelError(HarnessError, ValueError):
 
 class SafetyError(HarnessError, RuntimeError):
     """An illegal lifecycle transition or a refused arm."""
-
-
-class TripError(SafetyError):
-    """A run tripped; ``reason`` names the interlock or detector that fired."""
-
-    def __init__(self, reason: str, message: str = ""):
-        self.reason = reason
-        super().__init__(f"tripped: {reason}" + (f": {message}" if message else ""))

@@ -20,6 +20,7 @@ import numpy as np
 
 from drivers.measurements import Measurements
 from harness import rowlayout as layout
+from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.model.plant import Plant
 from harness.sampled_case import CaseResult, CaseSamples, case_result
@@ -102,7 +103,7 @@ class _HeldForce:
 
 
 def _control_step(
-    plant: Plant, times: np.ndarray, settings: SamplingSettings, controller, estimator: FrictionEstimator | None,
+    plant: Plant, times: np.ndarray, settings: SamplingSettings, controller: Controller, estimator: FrictionEstimator | None,
     values: dict[str, np.ndarray],
 ) -> Callable[[int, float], float]:
     """The controller's work at sample ``k`` (time ``t``, s): measure, estimate friction, compute the force.
@@ -139,7 +140,7 @@ def run_case(
     plant: Plant,
     duration_s: float,
     settings: SamplingSettings,
-    controller=None,
+    controller: Controller | None = None,
     estimator: FrictionEstimator | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> CaseResult:

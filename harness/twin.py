@@ -18,6 +18,7 @@ from collections.abc import Callable
 import numpy as np
 
 from harness import rowlayout as layout
+from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.peaks import peak_responses
 from harness.profile import Profile
@@ -41,7 +42,7 @@ _HELD = tuple(name for name in _RECORDED if name != layout.FORCE_MEASURED)
 
 
 def run_rig_twin(
-    profile: Profile, motion, rate_hz: float, controller, seed: int | None = None, asynchronous_delay_s: float = 0.0,
+    profile: Profile, motion, rate_hz: float, controller: Controller, seed: int | None = None, asynchronous_delay_s: float = 0.0,
     story_rate_hz: float | None = None, lockstep: bool = False, duration_s: float | None = None,
 ) -> CaseResult:
     """Simulate the controlled case through the rig's sensor, actuator and safety models.
@@ -155,7 +156,7 @@ class _TwinRig:
 
 
 def _twin_sample(
-    rig: _TwinRig, controller, estimator: FrictionEstimator, supervisor: Supervisor, health: TickHealth,
+    rig: _TwinRig, controller: Controller, estimator: FrictionEstimator, supervisor: Supervisor, health: TickHealth,
     values: dict[str, np.ndarray], period: float, story_every: int,
 ) -> Callable[[int], bool]:
     """One controller sample of the twin: read the sensors, estimate, control, supervise, record, advance.

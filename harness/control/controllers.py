@@ -14,10 +14,42 @@ and ``force_N``. They never read a clock.
 
 from __future__ import annotations
 
+from typing import ClassVar, Protocol, runtime_checkable
+
 import numpy as np
 
 from drivers.measurements import Measurements
 from harness.model.building import StateSpace
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """What the loop, the simulator and the twin need of a controller (SPEC 3).
+
+    Attributes
+    ----------
+    needs_full_state : bool
+        True if ``update`` reads ``state`` (Z); a rig measures only x_0, xdot_0, y_b, ydot_b.
+    sliding_variable : float
+        S of the last update (m/s), for the record.
+    equivalent_force_N : float
+        G of the last update (N), for the record.
+    """
+
+    needs_full_state: ClassVar[bool]
+    sliding_variable: float
+    equivalent_force_N: float
+
+    def reset(self) -> None:
+        """Back to the state before the first update."""
+
+    def update(self, t: float, dt: float, meas: Measurements, friction_N: float, state: np.ndarray | None) -> float:
+        """The raw actuator force (N) at time ``t`` (s), ``dt`` (s) after the previous update.
+
+        ``friction_N`` is the friction force to compensate (the online estimate or the
+        model's); ``state`` is Z for full-state designs, None on a rig. Never reads a clock.
+        """
+        ...
 
 
 class _SlidingModeInternals:

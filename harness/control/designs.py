@@ -11,7 +11,7 @@ from typing import Literal, Union
 
 import numpy as np
 
-from harness.control.controllers import PhiSMC, StateFeedbackSMC
+from harness.control.controllers import Controller, PhiSMC, StateFeedbackSMC
 from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups
 from harness.errors import ModelError
 from harness.model.building import BuildingConfig, state_space
@@ -85,7 +85,6 @@ class PhiDesign:
 
 
 ControllerDesign = Union[FullStateDesign, StaticOutputDesign, SimpleOutputDesign, PhiDesign]
-Controller = Union[StateFeedbackSMC, PhiSMC]
 
 
 def state_names(n_stories: int) -> list[str]:

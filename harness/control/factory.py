@@ -6,7 +6,8 @@ and a run on the real rig all get the same design from the same profile.
 
 from __future__ import annotations
 
-from harness.control.designs import Controller, build_controller
+from harness.control.controllers import Controller
+from harness.control.designs import build_controller
 from harness.errors import ProfileError
 from harness.profile import Profile
 

@@ -16,6 +16,8 @@ from collections.abc import Callable
 import numpy as np
 
 from harness import rowlayout as layout
+from harness.control.controllers import Controller
+from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
 from harness.loop.trip_outputs import TripOutputs
 from harness.safety.health import TickHealth
@@ -79,7 +81,7 @@ class ControlTick:
     """
 
     def __init__(
-        self, link, controller, estimator, supervisor: Supervisor, recorder=None, heartbeat_every: int = 5,
+        self, link, controller: Controller, estimator: FrictionEstimator, supervisor: Supervisor, recorder=None, heartbeat_every: int = 5,
         estop_every: int = 5, stop_table: Callable[[float], object] | None = None,
     ):
         self.reader = link.reader

@@ -22,7 +22,7 @@ A run folder (one per run, under ``logs/``) contains:
 from __future__ import annotations
 
 import re
-from typing import Final, Literal
+from typing import Final, Literal, get_args
 
 from harness.errors import HarnessError
 
@@ -35,11 +35,14 @@ SIGNALS_FILE: Final = "signals.csv"
 EVENTS_FILE: Final = "events.jsonl"
 CAN_FILE: Final = "can.log"
 
+#: What produced a run folder.
 RunKind = Literal["dry-run", "run", "simulation"]
-Outcome = Literal["completed", "tripped", "error", "incomplete"]
+#: How a run ended: ``stopped`` by the operator (safe stop), ``refused`` before arming by the
+#: pre-flight check, ``incomplete`` while it is still being written or after a crash.
+Outcome = Literal["completed", "stopped", "tripped", "refused", "error", "incomplete"]
 
-RUN_KINDS: Final[tuple[str, ...]] = ("dry-run", "run", "simulation")
-OUTCOMES: Final[tuple[str, ...]] = ("completed", "stopped", "tripped", "refused", "error", "incomplete")
+RUN_KINDS: Final[tuple[str, ...]] = get_args(RunKind)
+OUTCOMES: Final[tuple[str, ...]] = get_args(Outcome)
 
 #: A column name MATLAB keeps as-is (valid identifier, at most namelengthmax = 63 chars).
 _COLUMN_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,62}$")

@@ -37,7 +37,9 @@ from harness.record.layout import (
     METADATA_FILE,
     PROFILE_FILE,
     SIGNALS_FILE,
+    Outcome,
     RunFolderError,
+    RunKind,
     check_columns,
     check_kind,
     check_outcome,
@@ -72,7 +74,7 @@ class RunFolder:
         cls,
         log_dir: Path | str,
         profile_name: str,
-        kind: str,
+        kind: RunKind,
         resolved_profile_data: Mapping[str, Any],
         columns: Sequence[str],
         *,
@@ -139,12 +141,12 @@ class RunFolder:
         self._writer.start()
         return self
 
-    def finish(self, outcome: str, trip_reason: str | None = None, summary: Mapping[str, Any] | None = None) -> None:
+    def finish(self, outcome: Outcome, trip_reason: str | None = None, summary: Mapping[str, Any] | None = None) -> None:
         """Stop recording, write what is left and rewrite ``metadata.json`` atomically (idempotent).
 
         Parameters
         ----------
-        outcome : {"completed", "tripped", "error", "incomplete"}
+        outcome : {"completed", "stopped", "tripped", "refused", "error", "incomplete"}
             How the run ended.
         trip_reason : str, optional
             The interlock or detector that tripped, or the error message.
@@ -215,9 +217,8 @@ class RunFolder:
     ) -> None:
         if exc is None:
             self.finish("completed")
-        elif isinstance(exc, Exception):
-            reason = getattr(exc, "reason", None)
-            self.finish("tripped" if reason else "error", trip_reason=reason or f"{type(exc).__name__}: {exc}")
+        elif isinstance(exc, Exception):  # a trip is a finish("tripped", ...) by the session, never an exception
+            self.finish("error", trip_reason=f"{type(exc).__name__}: {exc}")
         else:  # KeyboardInterrupt, SystemExit: keep the data, but the run did not finish
             self.finish("incomplete", trip_reason=type(exc).__name__)
 

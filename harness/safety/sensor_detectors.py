@@ -16,7 +16,6 @@ from harness.safety.events import Action
 from harness.safety.health import TickHealth
 
 CHANNELS: tuple[str, ...] = ("x_0", "xdot_0", "y_b", "ydot_b")
-_IS_DISPLACEMENT = (True, False, True, False)
 
 
 def read_channels(health: TickHealth, out: list[float]) -> None:

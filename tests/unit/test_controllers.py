@@ -159,3 +159,16 @@ def test_controllers_reset_clears_internals():
     c.reset()
     assert (c.sliding_variable, c.equivalent_force_N, c.force_N) == (0.0, 0.0, 0.0)
     assert isinstance(c, PhiSMC) and not c.needs_full_state and StateFeedbackSMC.needs_full_state
+
+
+def test_every_design_builds_a_controller_of_the_protocol():
+    """Every shipped design is a Controller (the loop, the simulator and the twin rely on it)."""
+    from harness.control.controllers import Controller
+    from harness.control.factory import make_controller
+    from harness.profile import load_profile
+    from tests.conftest import PROFILES
+
+    for name in ("eight_story.yaml", "nceer_4dof.yaml"):
+        profile = load_profile(PROFILES / name)
+        for design in profile.control.designs:
+            assert isinstance(make_controller(profile, design), Controller), design

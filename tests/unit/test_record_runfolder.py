@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import yaml
 
-from harness.errors import HarnessError, TripError
+from harness.errors import HarnessError, SafetyError
 from harness.record import RunFolder, RunFolderError, canonical_columns, load_run
 
 COLUMNS = ("t_s", "sliding_displacement_m", "force_command_N", "state", "interlock_flags")
@@ -206,18 +206,18 @@ def test_flush_interval_above_100_ms_is_refused(tmp_path: Path) -> None:
         RunFolder.create(tmp_path, "p", "dry-run", {}, ("t_s",), flush_interval_s=0.5)
 
 
-def test_context_manager_records_completed_error_and_trip(tmp_path: Path) -> None:
+def test_context_manager_records_completed_and_error(tmp_path: Path) -> None:
     with RunFolder.create(tmp_path / "a", "p", "run", {}, ("t_s",)) as ok:
         ok.record_row((0.0,))
     with pytest.raises(RuntimeError), RunFolder.create(tmp_path / "b", "p", "run", {}, ("t_s",)) as bad:
         raise RuntimeError("drive fault")
-    with pytest.raises(TripError), RunFolder.create(tmp_path / "c", "p", "run", {}, ("t_s",)) as tripped:
-        raise TripError("stroke_hard_limit")
+    with pytest.raises(SafetyError), RunFolder.create(tmp_path / "c", "p", "run", {}, ("t_s",)) as refused:
+        raise SafetyError("arm refused: stroke_hard_limit")
     assert load_run(ok.path).outcome == "completed"
     assert load_run(bad.path).metadata["trip_reason"] == "RuntimeError: drive fault"
     assert load_run(bad.path).outcome == "error"
-    assert load_run(tripped.path).metadata["trip_reason"] == "stroke_hard_limit"
-    assert load_run(tripped.path).outcome == "tripped"
+    assert load_run(refused.path).metadata["trip_reason"] == "SafetyError: arm refused: stroke_hard_limit"
+    assert load_run(refused.path).outcome == "error"  # a trip is finished by the session, not raised
 
 
 def test_simulation_kind_has_no_can_log(tmp_path: Path) -> None:
