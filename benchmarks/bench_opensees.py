@@ -84,7 +84,7 @@ sys.path.insert(0, str(REPO))
 from harness.model.bearing import BearingConfig
 from harness.model.building import GRAVITY_M_S2, BuildingConfig, fixed_base_modes
 from harness.model.plant import Plant, TableMotion
-from harness.peaks import flatten, peak_responses
+from harness.peaks import peak_responses
 from harness.profile import Profile, load_profile
 from harness.records import GroundMotion
 from harness.simulation import SamplingSettings, run_case
@@ -113,7 +113,7 @@ class SideResult:
     Attributes
     ----------
     peaks : dict
-        Flat peaks (``harness.peaks.flatten``), SI: m and m/s^2.
+        Flat peaks (``harness.peaks.Peaks.flatten``), SI: m and m/s^2.
     analysis_s : float
         Wall time of the analysis (s), imports and loading excluded.
     details : dict
@@ -179,7 +179,7 @@ def run_ours(profile: Profile, motion: GroundMotion, rate_hz: float) -> SideResu
     plant = Plant(profile.structure, profile.bearing, TableMotion.from_motion(motion), rtol=profile.simulation.rtol)
     result = run_case("passive", plant, motion.duration_s, SamplingSettings(rate_hz))
     elapsed = time.perf_counter() - started
-    peaks = flatten(result.peaks)
+    peaks = result.peaks.flatten()
     peaks.pop("peak_force_pct_weight", None)
     return SideResult(peaks, elapsed, {"integrator_steps": result.integrator_steps, "rtol": profile.simulation.rtol})
 
@@ -420,7 +420,7 @@ def run_opensees(ops: ModuleType, profile: Profile, motion: GroundMotion, rate_h
     transient_s = time.perf_counter() - transient_started
     times = np.arange(n_samples + 1) / rate_hz
     table = TableMotion.from_motion(motion).acceleration(times)
-    peaks = flatten(peak_responses(opensees_columns(times, disp, acc, table), building.total_weight_N))
+    peaks = peak_responses(opensees_columns(times, disp, acc, table), building.total_weight_N).flatten()
     elapsed = time.perf_counter() - started
     peaks.pop("peak_force_pct_weight", None)
     axial = float(-ops.eleResponse(BEARING_ELE, "basicForce")[0])

@@ -32,7 +32,6 @@ sys.path.insert(0, str(REPO))
 from harness.control.estimator import FrictionEstimator  # noqa: E402
 from harness.model.plant import Plant, TableMotion  # noqa: E402
 from harness.model.reference import ReferencePlant  # noqa: E402
-from harness.peaks import flatten  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
 from harness.records import load_motion  # noqa: E402
 from harness.simulation import SamplingSettings, run_case  # noqa: E402
@@ -121,7 +120,7 @@ def main() -> int:
         ours = [run(Plant, profile, table, controller, rate) for _ in range(args.repeat)]
         ours_wall = statistics.median(w for w, _ in ours)
         ref_wall, reference = run(ReferencePlant, profile, table, controller, rate)
-        mine, theirs = flatten(ours[0][1].peaks), flatten(reference.peaks)
+        mine, theirs = ours[0][1].peaks.flatten(), reference.peaks.flatten()
         worst_key = max(theirs, key=lambda k: abs(mine[k] - theirs[k]) / abs(theirs[k]) if theirs[k] else 0.0)
         worst = abs(mine[worst_key] - theirs[worst_key]) / abs(theirs[worst_key]) * 100
         row = {

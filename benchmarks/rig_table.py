@@ -22,7 +22,7 @@ sys.path.insert(0, str(REPO))
 from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
-from harness.peaks import flatten, reduction_pct  # noqa: E402
+from harness.peaks import reduction_pct  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
 from harness.study import StudyOptions, run_study  # noqa: E402
 
@@ -50,7 +50,7 @@ def rig_peaks(profile_path: Path, records_dir: str, rig_effects: bool, overrides
         options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0,
                                duration_s=30.0, rig_effects=rig_effects)
         study = run_study(profile, options)
-        results[record] = {case: flatten(result.peaks) for case, result in study.cases.items()}
+        results[record] = {case: result.peaks.flatten() for case, result in study.cases.items()}
     return results
 
 

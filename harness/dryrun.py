@@ -28,10 +28,10 @@ from harness.errors import BusError
 from harness.loop.table_link import CanTableLink
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
-from harness.peaks import flatten
+from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.record import load_run
-from harness.session import SessionResult, SessionSettings, run_peaks, run_session
+from harness.session import SessionResult, SessionSettings, run_session
 from harness.simulation import CaseResult, SamplingSettings, run_case
 from harness.control.factory import make_controller
 from harness.study import StudyOptions, motion_facts, prepare_motion, resolve_profile
@@ -65,7 +65,7 @@ class DryRunResult:
 
     session: SessionResult
     profile: Profile  # resolved: every option folded in
-    peaks: dict
+    peaks: Peaks
     passive: CaseResult | None
     twin: CaseResult | None
     motion: object
@@ -73,7 +73,7 @@ class DryRunResult:
 
     def largest_twin_difference(self) -> tuple[str, float]:
         """The peak that differs most from the simulated twin's, and by how much (% of the twin's)."""
-        ours, twin = flatten(self.peaks), flatten(self.twin.peaks)
+        ours, twin = self.peaks.flatten(), self.twin.peaks.flatten()
         worst = max(twin, key=lambda k: abs(ours[k] - twin[k]) / abs(twin[k]) if twin[k] else 0.0)
         difference = abs(ours[worst] - twin[worst]) / abs(twin[worst]) * 100 if twin[worst] else 0.0
         return worst, difference
@@ -250,7 +250,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
             rig_link.close()
         if process is not None:
             _stop_process(process)
-    peaks = run_peaks(session.run_path, profile.structure.total_weight_N)
+    peaks = run_peaks(load_run(session.run_path))  # weight: the metadata's, the resolved profile's
     passive = twin = None
     span = record_span_s(session, motion)
     if options.compare:

@@ -1,81 +1,206 @@
-"""Peak responses people compare (SPEC 5), from run-folder columns.
+"""Peak responses people compare (SPEC 5): one model, computed one way, from a case's columns.
 
-The same function serves ``harness simulate``, dry runs and reports, so every table
-of peaks in the project is computed one way.
+:func:`peak_responses` turns the columns of one case (a simulated case, the rig twin, a
+run folder read back) into a :class:`Peaks`; :func:`run_peaks` does the same for a run
+folder, taking the weight and whether the run is passive from its metadata. ``harness
+simulate``, dry runs, reports and benchmarks all read their peaks from here, and compare
+two cases with :func:`reduction_pct`. Rendering (console, HTML, CSV) is
+:mod:`harness.report.peak_table`'s business.
+
+Values are SI. A peak with nothing to measure (the column is absent, or holds no finite
+value) is NaN.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from harness.rowlayout import (
+    BASE_ACCELERATION,
+    FORCE_COMMAND,
+    FORCE_MEASURED,
+    FORCE_RAW,
+    SLIDING_DISPLACEMENT,
+    TABLE_ACCELERATION,
+    TABLE_DISPLACEMENT,
+    TABLE_VELOCITY,
+    count_stories,
+    drift,
+    floor_acceleration,
+)
 
-def story_count(columns: Mapping[str, np.ndarray]) -> int:
-    """Number of stories with a ``drift_j_m`` column."""
-    n = 0
-    while f"drift_{n + 1}_m" in columns:
-        n += 1
-    return n
+if TYPE_CHECKING:
+    from harness.record.reader import RunData
+
+#: The control force u of SPEC 5, best source first: the supervised command sent to the
+#: actuator, else the controller's raw output. A column without a finite value is skipped.
+FORCE_COLUMNS: tuple[str, ...] = (FORCE_COMMAND, FORCE_RAW)
+
+NAN = float("nan")
+
+
+@dataclass(frozen=True)
+class Peaks:
+    """Peak |value| of one case's responses (SPEC 5), SI; NaN where there is nothing to measure.
+
+    Attributes
+    ----------
+    sliding_displacement_m : float
+        Peak sliding displacement of the base mat on the table, ``x_b`` (m).
+    base_acceleration_m_s2 : float
+        Peak absolute acceleration of the base mat (m/s^2).
+    drift_m : tuple of float
+        Peak interstory drift of stories 1..n, bottom up (m).
+    floor_acceleration_m_s2 : tuple of float
+        Peak absolute acceleration of floors 1..n, bottom up (m/s^2).
+    peak_force_pct_weight : float
+        Peak control force ``u`` in percent of the total weight ``mbar g`` (%); 0 for a passive case.
+    measured_force_pct_weight : float
+        Peak force the actuator measured, in percent of the weight (%).
+    table_acceleration_m_s2, table_velocity_m_s, table_displacement_m : float
+        Peak table motion the case was fed (m/s^2, m/s, m): two runs of "the same record"
+        can be seen to be fed the same input.
+    """
+
+    sliding_displacement_m: float
+    base_acceleration_m_s2: float
+    drift_m: tuple[float, ...]
+    floor_acceleration_m_s2: tuple[float, ...]
+    peak_force_pct_weight: float
+    measured_force_pct_weight: float = NAN
+    table_acceleration_m_s2: float = NAN
+    table_velocity_m_s: float = NAN
+    table_displacement_m: float = NAN
+
+    @property
+    def n_stories(self) -> int:
+        """Stories with a drift peak."""
+        return len(self.drift_m)
+
+    def as_json(self) -> dict[str, float | list[float]]:
+        """The SPEC 5 peaks as ``harness simulate --json`` writes each case (SI, story lists bottom up).
+
+        Returns
+        -------
+        dict
+            ``{"sliding_displacement_m", "base_acceleration_m_s2", "drift_m": [1..n],
+            "floor_acceleration_m_s2": [1..n], "peak_force_pct_weight"}``.
+        """
+        return {
+            "sliding_displacement_m": self.sliding_displacement_m,
+            "base_acceleration_m_s2": self.base_acceleration_m_s2,
+            "drift_m": list(self.drift_m),
+            "floor_acceleration_m_s2": list(self.floor_acceleration_m_s2),
+            "peak_force_pct_weight": self.peak_force_pct_weight,
+        }
+
+    def flatten(self) -> dict[str, float]:
+        """The SPEC 5 peaks of :meth:`as_json`, one scalar each, named by their column (``drift_3_m`` ...)."""
+        stories = range(1, self.n_stories + 1)
+        return {
+            "sliding_displacement_m": self.sliding_displacement_m,
+            "base_acceleration_m_s2": self.base_acceleration_m_s2,
+            **{drift(j): self.drift_m[j - 1] for j in stories},
+            **{floor_acceleration(j): self.floor_acceleration_m_s2[j - 1] for j in stories},
+            "peak_force_pct_weight": self.peak_force_pct_weight,
+        }
 
 
 def peak_abs(values: np.ndarray) -> float | None:
-    """Largest finite |value|, or None if there is none."""
+    """Largest finite |value| of ``values``, or None if there is none."""
     values = np.asarray(values, dtype=float)
     finite = np.abs(values[np.isfinite(values)])
     return float(finite.max()) if finite.size else None
 
 
-def _peak(values: np.ndarray) -> float:
-    peak = peak_abs(values)
-    return float("nan") if peak is None else peak
+def _column_peak(columns: Mapping[str, np.ndarray], name: str) -> float:
+    """Peak |value| of column ``name``; NaN if it is absent or has no finite value."""
+    peak = peak_abs(columns[name]) if name in columns else None
+    return NAN if peak is None else peak
 
 
-def peak_responses(columns: Mapping[str, np.ndarray], total_weight_N: float, force_column: str = "force_command_N") -> dict:
-    """Peaks of one case.
+def force_column(columns: Mapping[str, np.ndarray]) -> str | None:
+    """The column holding the control force u (:data:`FORCE_COLUMNS`, first with a finite value), or None."""
+    for name in FORCE_COLUMNS:
+        if name in columns and np.isfinite(columns[name]).any():
+            return name
+    return None
+
+
+def _percent_of_weight(peak_N: float, total_weight_N: float | None) -> float:
+    """``100 peak / weight`` (%); NaN without a positive weight."""
+    if not isinstance(total_weight_N, (int, float)) or total_weight_N <= 0:
+        return NAN
+    return 100.0 * peak_N / total_weight_N
+
+
+def _control_force_pct(columns: Mapping[str, np.ndarray], total_weight_N: float | None, passive: bool | None) -> float:
+    """Peak control force in percent of the weight: 0 for a passive case without one, NaN if unknown."""
+    column = force_column(columns)
+    if column is None:
+        is_passive = passive if passive is not None else not any(name in columns for name in FORCE_COLUMNS)
+        return 0.0 if is_passive else NAN
+    return _percent_of_weight(_column_peak(columns, column), total_weight_N)
+
+
+def peak_responses(
+    columns: Mapping[str, np.ndarray], total_weight_N: float | None, *, passive: bool | None = None
+) -> Peaks:
+    """Peaks of one case from its columns.
 
     Parameters
     ----------
-    columns : mapping
-        Canonical columns (``drift_j_m``, ``floor_acceleration_j_m_s2``,
-        ``sliding_displacement_m``, ``base_acceleration_m_s2``, a force column).
-    total_weight_N : float
-        ``mbar g`` (N), for the force as % of weight.
-    force_column : str
-        Column of the force applied to the base mat; absent means a passive case (0 %).
+    columns : mapping of str to ndarray
+        Columns named as in :mod:`harness.rowlayout` (``drift_j_m``,
+        ``floor_acceleration_j_m_s2``, ``sliding_displacement_m``, ``base_acceleration_m_s2``,
+        a force column of :data:`FORCE_COLUMNS`, ...). Any may be absent: its peak is NaN.
+    total_weight_N : float or None
+        ``mbar g`` (N), for the forces in percent of it; None or not positive: those are NaN.
+    passive : bool, optional
+        Whether the case has no controller, so that no force column means a force of 0 %.
+        Default: passive exactly when no column of :data:`FORCE_COLUMNS` is present.
 
     Returns
     -------
-    dict
-        ``{"sliding_displacement_m", "base_acceleration_m_s2", "drift_m": [1..n],
-        "floor_acceleration_m_s2": [1..n], "peak_force_pct_weight"}`` (SI).
+    Peaks
     """
-    n = story_count(columns)
-    force = columns.get(force_column)
-    return {
-        "sliding_displacement_m": _peak(columns["sliding_displacement_m"]),
-        "base_acceleration_m_s2": _peak(columns["base_acceleration_m_s2"]),
-        "drift_m": [_peak(columns[f"drift_{j}_m"]) for j in range(1, n + 1)],
-        "floor_acceleration_m_s2": [_peak(columns[f"floor_acceleration_{j}_m_s2"]) for j in range(1, n + 1)],
-        "peak_force_pct_weight": 0.0 if force is None else 100.0 * _peak(force) / total_weight_N,
-    }
+    stories = range(1, count_stories(tuple(columns)) + 1)
+    measured = _column_peak(columns, FORCE_MEASURED)
+    return Peaks(
+        sliding_displacement_m=_column_peak(columns, SLIDING_DISPLACEMENT),
+        base_acceleration_m_s2=_column_peak(columns, BASE_ACCELERATION),
+        drift_m=tuple(_column_peak(columns, drift(j)) for j in stories),
+        floor_acceleration_m_s2=tuple(_column_peak(columns, floor_acceleration(j)) for j in stories),
+        peak_force_pct_weight=_control_force_pct(columns, total_weight_N, passive),
+        measured_force_pct_weight=_percent_of_weight(measured, total_weight_N),
+        table_acceleration_m_s2=_column_peak(columns, TABLE_ACCELERATION),
+        table_velocity_m_s=_column_peak(columns, TABLE_VELOCITY),
+        table_displacement_m=_column_peak(columns, TABLE_DISPLACEMENT),
+    )
+
+
+def run_peaks(run: RunData) -> Peaks:
+    """Peaks of a run folder read back (:func:`harness.record.load_run`), over all its rows.
+
+    The weight is the metadata's ``total_weight_N``; a run is passive when its case or
+    controller is ``"passive"``.
+    """
+    weight = run.metadata.get("total_weight_N")
+    return peak_responses(run.signals, weight if isinstance(weight, (int, float)) else None, passive=run.is_passive)
 
 
 def reduction_pct(passive: float | None, hybrid: float | None) -> float | None:
-    """Percent reduction ``100 (passive - hybrid) / passive`` (SPEC 5); None if either is absent or passive is 0."""
-    if passive is None or hybrid is None or passive == 0.0:
+    """Percent reduction ``100 (passive - hybrid) / passive`` (SPEC 5).
+
+    Returns None if either value is absent or not finite, or ``passive`` is 0.
+    """
+    if passive is None or hybrid is None or not math.isfinite(passive) or not math.isfinite(hybrid):
+        return None
+    if passive == 0.0:
         return None
     return 100.0 * (passive - hybrid) / passive
-
-
-def flatten(peaks: Mapping) -> dict[str, float]:
-    """One scalar per entry, with story lists expanded (``drift_m[3]`` -> ``drift_3_m``)."""
-    flat: dict[str, float] = {}
-    for key, value in peaks.items():
-        if isinstance(value, (list, tuple)):
-            for j, item in enumerate(value, start=1):
-                name = f"drift_{j}_m" if key == "drift_m" else f"floor_acceleration_{j}_m_s2"
-                flat[name] = float(item)
-        else:
-            flat[key] = float(value)
-    return flat

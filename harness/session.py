@@ -25,9 +25,8 @@ from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult, LoopStatus
 from harness.loop.table_link import CanTableLink
 from harness.loop.tick import ControlTick
 from harness.model.warmup import warm_up
-from harness.peaks import peak_responses
 from harness.profile import Profile
-from harness.record import RunFolder, load_run
+from harness.record import RunFolder
 from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
@@ -242,10 +241,3 @@ def run_session(
         link.writer.tap = None
         link.reader.tap = None
         link.close()
-
-
-def run_peaks(run_path: Path, total_weight_N: float) -> dict:
-    """Peaks of a finished run folder, over the ticks of the run (ARMED to DONE)."""
-    data = load_run(run_path)
-    columns = {name: data[name] for name in data.columns}
-    return peak_responses(columns, total_weight_N)

@@ -69,7 +69,7 @@ class StudyResult:
                 "rig_effects": self.rig_effects,
             },
             "total_weight_N": self.profile.structure.total_weight_N,
-            "cases": {"passive": self.cases["passive"].peaks, "controlled": controlled.peaks},
+            "cases": {"passive": self.cases["passive"].peaks.as_json(), "controlled": controlled.peaks.as_json()},
         }
 
     def write_json(self, path: str | Path) -> None:

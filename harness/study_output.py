@@ -33,7 +33,7 @@ def write_study_folders(result, out_dir: str | Path) -> Path:
             "controller": "none" if name == "passive" else result.controller_name,
             "sampling": summary["sampling"],
             "total_weight_N": profile.structure.total_weight_N,
-            "peaks": case.peaks,
+            "peaks": case.peaks.as_json(),
             "integrator_steps": case.integrator_steps,
             "wall_time_s": case.wall_time_s,
         }

@@ -69,7 +69,7 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.dryrun import DryRunOptions, dry_run
-    from harness.peak_table import peak_table
+    from harness.report.tables import reduction_table
 
     profile = load_acknowledged(args, console)
     options = DryRunOptions(
@@ -90,7 +90,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
     title = "peak responses: simulated passive reference and the dry run"
     if result.span_s is not None:
         title += f", over the {result.span_s:.2f} s of record that ran before the run ended ({session.outcome})"
-    console.print(peak_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run")))
+    table = reduction_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run"))
+    console.print(table.to_rich())
     worst, difference_pct = result.largest_twin_difference()
     console.print(f"against `harness simulate --rig-effects` (the rig's models offline): largest peak difference "
                   f"{difference_pct:.1f} % ({worst})")

@@ -66,8 +66,8 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace, console: Console) -> int:
-    from harness.peak_table import peak_table
     from harness.profile import load_profile
+    from harness.report.tables import reduction_table
     from harness.study import run_study
 
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     twin = result.cases.get("controlled")
     if twin is not None and twin.extra.get("outcome") == "tripped":
         console.print(f"[bold red]the controlled case tripped:[/] {escape(twin.extra['trip_reason'])}")
-    console.print(peak_table(result.cases["passive"].peaks, controlled.peaks if controlled else None, title))
+    console.print(reduction_table(result.cases["passive"].peaks, controlled.peaks if controlled else None, title).to_rich())
     cost = sum(case.wall_time_s for case in result.cases.values())
     console.print(f"simulated {len(result.cases)} x {motion.duration_s:.1f} s in {cost:.2f} s of wall time")
     if args.json:

@@ -1,28 +1,58 @@
-"""Reports from run folders: peak tables, plots, a self-contained HTML page, a text summary.
+"""Reports from run folders and the peak tables of every command: tables, plots, one HTML page, a summary.
 
 Public API::
 
     build_report(run_paths, out_dir=None, progress=None) -> ReportResult
     summary_text(result) -> str
-    peak_table(runs), pair_table(passive, controlled), comparison_table(a, b), table_text(table), table_csv(table)
+    PeakTable: .to_rich(), .to_text(), .to_html(), .to_csv()
+    reduction_table(passive_peaks, controlled_peaks, title, labels)   # the consoles' table
+    runs_table(runs), pair_table(passive, controlled), comparison_table(a, b)
+
+Names are imported on first use, so a command that only prints a peak table (``harness
+simulate``) does not load matplotlib.
 """
 
-from harness.report.build import ReportResult, build_report, summary_text
-from harness.report.figure import PlotFile
-from harness.report.peaks import reduction_percent, run_peaks
-from harness.report.tables import Table, comparison_table, pair_table, peak_table, table_csv, table_text
+from __future__ import annotations
+
+from importlib import import_module
+from typing import Any
+
+#: Public name -> the module defining it.
+_EXPORTS = {
+    "PeakRow": "harness.report.peak_table",
+    "PeakTable": "harness.report.peak_table",
+    "PlotFile": "harness.report.figure",
+    "ReportResult": "harness.report.build",
+    "build_report": "harness.report.build",
+    "comparison_table": "harness.report.tables",
+    "pair_table": "harness.report.tables",
+    "reduction_table": "harness.report.tables",
+    "runs_table": "harness.report.tables",
+    "summary_text": "harness.report.build",
+}
 
 __all__ = [
+    "PeakRow",
+    "PeakTable",
     "PlotFile",
     "ReportResult",
-    "Table",
     "build_report",
     "comparison_table",
     "pair_table",
-    "peak_table",
-    "reduction_percent",
-    "run_peaks",
+    "reduction_table",
+    "runs_table",
     "summary_text",
-    "table_csv",
-    "table_text",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name from its module on first use (PEP 562)."""
+    if name not in _EXPORTS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_EXPORTS[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))

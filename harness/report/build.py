@@ -19,8 +19,9 @@ from pathlib import Path
 from harness.record.reader import RunData, load_runs
 from harness.report.figure import PlotFile
 from harness.report.html import report_html
+from harness.report.peak_table import PeakTable
 from harness.report.plots import PLOTS
-from harness.report.tables import Table, comparison_table, pair_table, peak_table, table_csv, table_text
+from harness.report.tables import comparison_table, pair_table, runs_table
 
 #: ``progress(message, done, total)``: called before each step and once at the end (done == total).
 Progress = Callable[[str, int, int], None]
@@ -42,7 +43,7 @@ class ReportResult:
         The self-contained page.
     plots : list of PlotFile
         Written PNGs (plots without data are skipped).
-    tables : list of Table
+    tables : list of PeakTable
         Peak, pair and comparison tables.
     runs : list of RunData
         The runs read.
@@ -57,7 +58,7 @@ class ReportResult:
     out_dir: Path
     html_path: Path
     plots: list[PlotFile] = field(default_factory=list)
-    tables: list[Table] = field(default_factory=list)
+    tables: list[PeakTable] = field(default_factory=list)
     runs: list[RunData] = field(default_factory=list)
     table_files: list[Path] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
@@ -93,9 +94,9 @@ def comparison_pairs(runs: Sequence[RunData]) -> list[tuple[RunData, RunData]]:
     return pairs[:MAX_COMPARISONS]
 
 
-def build_tables(runs: Sequence[RunData]) -> list[Table]:
+def build_tables(runs: Sequence[RunData]) -> list[PeakTable]:
     """The peak table, then passive/controlled tables, then comparison tables."""
-    tables = [peak_table(runs)]
+    tables = [runs_table(runs)]
     tables += [pair_table(p, c) for p, c in passive_pairs(runs)]
     tables += [comparison_table(a, b) for a, b in comparison_pairs(runs)]
     return tables
@@ -171,12 +172,12 @@ def build_report(
     return result
 
 
-def _write_table_csv(out_dir: Path, index: int, table: Table) -> Path:
+def _write_table_csv(out_dir: Path, index: int, table: PeakTable) -> Path:
     slug = "".join(ch if ch.isalnum() else "_" for ch in table.title.lower()).strip("_")
     while "__" in slug:
         slug = slug.replace("__", "_")
     path = out_dir / f"table_{index}_{slug[:60]}.csv"
-    path.write_text(table_csv(table), encoding="utf-8")
+    path.write_text(table.to_csv(), encoding="utf-8")
     return path
 
 
@@ -190,7 +191,7 @@ def summary_text(result: ReportResult) -> str:
         lines.append("Warnings:")
         lines += [f"  ! {w}" for w in result.warnings]
     for table in result.tables:
-        lines += ["", table_text(table)]
+        lines += ["", table.to_text()]
     lines += [
         "",
         f"Report: {result.html_path}",

@@ -13,7 +13,7 @@ from html import escape
 
 from harness.record.reader import RunData
 from harness.report.figure import PlotFile
-from harness.report.tables import Table, quantity_digits
+from harness.report.peak_table import PeakTable
 
 _CSS = """
 body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2em auto; max-width: 1260px; color: #222; }
@@ -69,19 +69,6 @@ def _versions(runs: Sequence[RunData]) -> str:
     return "<p class='note'>Software:</p><ul class='note'>" + "".join(lines) + "</ul>"
 
 
-def table_html(table: Table) -> str:
-    """An HTML ``<table>`` of ``table`` with its title and note."""
-    digits = quantity_digits(table)
-    head = "<tr><th>Quantity</th><th>Unit</th>" + "".join(f"<th>{escape(c)}</th>" for c in table.columns) + "</tr>"
-    body = []
-    for row in table.rows:
-        texts = (table.cell_text(row, i, digits.get(row.key, 3)) for i in range(len(table.columns)))
-        cells = "".join(f"<td class='num'>{escape(text)}</td>" for text in texts)
-        body.append(f"<tr><td>{escape(row.label)}</td><td>{escape(row.unit)}</td>{cells}</tr>")
-    note = f"<p class='note'>{escape(table.note)}</p>" if table.note else ""
-    return f"<h2>{escape(table.title)}</h2><table>{head}{''.join(body)}</table>{note}"
-
-
 def _figure_html(plot: PlotFile) -> str:
     return (
         f"<figure><img src='{data_uri(plot)}' alt='{escape(plot.title)}' width='{plot.width_px}' height='{plot.height_px}'>"
@@ -90,14 +77,14 @@ def _figure_html(plot: PlotFile) -> str:
 
 
 def report_html(
-    runs: Sequence[RunData], tables: Sequence[Table], plots: Sequence[PlotFile], warnings: Sequence[str]
+    runs: Sequence[RunData], tables: Sequence[PeakTable], plots: Sequence[PlotFile], warnings: Sequence[str]
 ) -> str:
     """The whole report page.
 
     Parameters
     ----------
     runs : sequence of RunData
-    tables : sequence of Table
+    tables : sequence of PeakTable
     plots : sequence of PlotFile
         Written PNGs, embedded in order.
     warnings : sequence of str
@@ -112,7 +99,7 @@ def report_html(
         f"<h1>{escape(title)}</h1><p class='note'>Generated {escape(made)} by shaketable-harness.</p>",
         warn,
         _runs_section(runs),
-        *(table_html(t) for t in tables),
+        *(table.to_html() for table in tables),
         "<h2>Plots</h2>" if plots else "",
         *(_figure_html(p) for p in plots),
         "</body></html>",

@@ -15,10 +15,10 @@ import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
 
+from harness.peaks import run_peaks
 from harness.record.columns import drift
 from harness.record.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
-from harness.report.peaks import run_peaks
 
 EVENT_KINDS = ("trip", "interlock", "warning")
 _MAX_EVENT_LABELS = 12
@@ -288,13 +288,12 @@ def peak_profile_plot(runs: Sequence[RunData], out_dir: Path) -> PlotFile | None
         fig = figure(520)
         left, right = fig.subplots(1, 2)
         for run, colour in zip(runs, colours(runs)):
-            peaks = run_peaks(run, stories)
-            drifts = [peaks[f"drift_{j}"] for j in range(1, stories + 1)]
-            if all(value is not None for value in drifts):
-                left.plot(np.array(drifts) * 1e3, range(1, stories + 1), "o-", color=colour, label=run.label)
-            floors = [peaks[f"floor_acceleration_{j}"] for j in range(1, stories + 1)]
-            accelerations = [peaks["base_acceleration"], *floors]
-            if all(value is not None for value in accelerations):
+            peaks = run_peaks(run)
+            drifts = np.array(peaks.drift_m)
+            if drifts.size == stories and np.isfinite(drifts).all():
+                left.plot(drifts * 1e3, range(1, stories + 1), "o-", color=colour, label=run.label)
+            accelerations = np.array((peaks.base_acceleration_m_s2, *peaks.floor_acceleration_m_s2))
+            if accelerations.size == stories + 1 and np.isfinite(accelerations).all():
                 right.plot(accelerations, range(0, stories + 1), "s-", color=colour, label=run.label)
         left.set(xlabel="Peak interstory drift (mm)", ylabel="Story", title="Peak drift per story")
         left.set_yticks(range(1, stories + 1))

@@ -21,7 +21,7 @@ from drivers.protocol_values import DriveState, RigCommand
 from harness.can_config import CanConfig
 from harness.can_link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
-from harness.peaks import flatten, peak_responses
+from harness.peaks import peak_responses
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig, SensorsConfig
 from harness.rig.virtual_rig import RigParts, VirtualRig
@@ -96,8 +96,8 @@ def _compare(profile, options: StudyOptions) -> None:
     assert columns["t_s"].size == n, "one history row per step of the record"
     np.testing.assert_allclose(columns["t_s"], reference["t_s"][:n], atol=1e-9)
     weight = profile.structure.total_weight_N
-    ours = flatten(peak_responses(columns, weight))
-    theirs = flatten(peak_responses({k: v[:n] for k, v in reference.items()}, weight))
+    ours = peak_responses(columns, weight).flatten()
+    theirs = peak_responses({k: v[:n] for k, v in reference.items()}, weight).flatten()
     assert theirs["sliding_displacement_m"] > 1e-3 and theirs["peak_force_pct_weight"] > 1.0, "a run that does something"
     for name, expected in theirs.items():
         assert ours[name] == pytest.approx(expected, rel=0.01), name

@@ -22,7 +22,7 @@ def _stroke_and_pgd(options: StudyOptions, overrides: tuple[str, ...] = ()) -> t
     """Controlled peak stroke (m), the record's PGD (m) and the peak force (% W)."""
     study = run_study(load_profile(RIG_PROFILE, overrides=overrides), options)
     peaks = study.cases["controlled"].peaks
-    return peaks["sliding_displacement_m"], study.motion.pgd_m, peaks["peak_force_pct_weight"]
+    return peaks.sliding_displacement_m, study.motion.pgd_m, peaks.peak_force_pct_weight
 
 
 def test_shipped_profile_uses_p1_8_per_s():

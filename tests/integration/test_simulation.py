@@ -8,7 +8,6 @@ import pytest
 from harness.control.estimator import FrictionEstimator
 from harness.model.plant import Plant, TableMotion
 from harness.model.reference import ReferencePlant
-from harness.peaks import flatten
 from harness.profile import load_profile
 from harness.records import load_motion
 from harness.rowlayout import simulation_columns
@@ -34,7 +33,7 @@ def _compare(profile, table, controller_name, duration, friction="model"):
         controller = None if controller_name is None else make_controller(profile, controller_name)
         estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
         results.append(run_case("case", plant, duration, settings, controller, estimator))
-    ours, reference = (flatten(r.peaks) for r in results)
+    ours, reference = (r.peaks.flatten() for r in results)
     for key, value in reference.items():
         if value == 0:
             assert ours[key] == 0
@@ -116,7 +115,7 @@ def test_phi_below_one_bounds_the_stroke_against_estimate_bias():
         plant = Plant(profile.structure, profile.bearing, table)
         controller = _Biased(make_controller(profile, name), bias)
         result = run_case(name, plant, duration_s, SamplingSettings(500.0, 0.0, "model"), controller)
-        strokes[name] = result.peaks["sliding_displacement_m"]
+        strokes[name] = result.peaks.sliding_displacement_m
         base = result.columns["base_displacement_m"]
         creep[name] = abs(base[-1000:].mean()) - abs(base[:1000].mean())
     assert strokes["OF"] > 2 * strokes["phi"]
@@ -126,7 +125,7 @@ def test_phi_below_one_bounds_the_stroke_against_estimate_bias():
 def test_transport_delay_degrades_control():
     no_delay = _rig_case(500.0, delay=0.0)
     delayed = _rig_case(500.0, delay=0.02)
-    assert max(delayed.peaks["drift_m"]) > 1.2 * max(no_delay.peaks["drift_m"])
+    assert max(delayed.peaks.drift_m) > 1.2 * max(no_delay.peaks.drift_m)
 
 
 def test_online_estimator_tracks_the_model_friction():
@@ -146,7 +145,7 @@ def test_online_estimator_tracks_the_model_friction():
 def test_estimator_friction_source_is_close_to_model_source():
     model = _rig_case(500.0, "phi", friction="model")
     estimated = _rig_case(500.0, "phi", friction="estimator")
-    assert estimated.peaks["sliding_displacement_m"] == pytest.approx(model.peaks["sliding_displacement_m"], rel=0.1)
+    assert estimated.peaks.sliding_displacement_m == pytest.approx(model.peaks.sliding_displacement_m, rel=0.1)
 
 
 @pytest.mark.parametrize("controller, delay_s", [(None, 0.0), ("FSF-I", 0.0), ("FSF-I", 0.003)])

@@ -1,4 +1,4 @@
-"""Peak, passive/controlled and comparison tables against the run data they come from."""
+"""The peak tables (runs side by side, passive/controlled, comparison, the consoles') against their data."""
 
 from __future__ import annotations
 
@@ -7,8 +7,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.record import RunData, canonical_columns, load_run, load_runs, write_simulation_case
-from harness.report import comparison_table, pair_table, peak_table, reduction_percent, run_peaks, table_text
+from harness.peaks import run_peaks
+from harness.record import (
+    RunData,
+    canonical_columns,
+    load_run,
+    load_runs,
+    write_simulation_case,
+)
+from harness.report import comparison_table, pair_table, reduction_table, runs_table
 
 WEIGHT_N = 4 * 9.80665 * 1000.0
 N_STORIES = 3
@@ -50,12 +57,12 @@ def test_run_peaks_match_the_recorded_signals(pair) -> None:
     _, controlled_run, _, controlled = pair
     peaks = run_peaks(controlled_run)
     for j in range(1, N_STORIES + 1):
-        assert peaks[f"drift_{j}"] == pytest.approx(_peak(controlled[f"drift_{j}_m"]), rel=1e-9)
-        assert peaks[f"floor_acceleration_{j}"] == pytest.approx(_peak(controlled[f"floor_acceleration_{j}_m_s2"]), rel=1e-9)
-    assert peaks["sliding_displacement"] == pytest.approx(_peak(controlled["sliding_displacement_m"]), rel=1e-9)
-    assert peaks["base_acceleration"] == pytest.approx(_peak(controlled["base_acceleration_m_s2"]), rel=1e-9)
-    assert peaks["force_percent_weight"] == pytest.approx(100 * _peak(controlled["force_command_N"]) / WEIGHT_N, rel=1e-9)
-    assert peaks["table_pga"] == pytest.approx(_peak(controlled["table_acceleration_m_s2"]), rel=1e-9)
+        assert peaks.drift_m[j - 1] == pytest.approx(_peak(controlled[f"drift_{j}_m"]), rel=1e-9)
+        assert peaks.floor_acceleration_m_s2[j - 1] == pytest.approx(_peak(controlled[f"floor_acceleration_{j}_m_s2"]), rel=1e-9)
+    assert peaks.sliding_displacement_m == pytest.approx(_peak(controlled["sliding_displacement_m"]), rel=1e-9)
+    assert peaks.base_acceleration_m_s2 == pytest.approx(_peak(controlled["base_acceleration_m_s2"]), rel=1e-9)
+    assert peaks.peak_force_pct_weight == pytest.approx(100 * _peak(controlled["force_command_N"]) / WEIGHT_N, rel=1e-9)
+    assert peaks.table_acceleration_m_s2 == pytest.approx(_peak(controlled["table_acceleration_m_s2"]), rel=1e-9)
 
 
 def test_pair_table_shows_peaks_in_display_units_and_reduction_beside_the_controlled_value(pair) -> None:
@@ -88,9 +95,9 @@ def test_comparison_table_gives_both_peaks_and_their_difference(pair) -> None:
     assert row.values[3] == pytest.approx(100 * (b - a) / a, rel=1e-9)
 
 
-def test_peak_table_has_a_column_per_run_and_hides_absent_quantities(pair) -> None:
+def test_runs_table_has_a_column_per_run_and_hides_absent_quantities(pair) -> None:
     passive_run, controlled_run, _, _ = pair
-    table = peak_table([passive_run, controlled_run])
+    table = runs_table([passive_run, controlled_run])
     assert table.columns == (passive_run.label, controlled_run.label)
     keys = [r.key for r in table.rows]
     assert "drift_3" in keys and "drift_4" not in keys
@@ -100,49 +107,47 @@ def test_force_percent_is_absent_without_total_weight(tmp_path: Path) -> None:
     columns = ("t_s", "force_command_N")
     folder = write_simulation_case(tmp_path, "controlled", columns, {"t_s": np.arange(3.0), "force_command_N": np.array([1.0, -4.0, 2.0])}, {})
     run = load_run(folder)
-    assert run_peaks(run)["force_percent_weight"] is None
-    text = table_text(peak_table([run]))
+    text = runs_table([run]).to_text()
     assert "Peak control force" not in text
 
 
 def test_table_text_lists_every_row_with_its_formatted_value(pair) -> None:
     passive_run, controlled_run, passive, _ = pair
-    text = table_text(pair_table(passive_run, controlled_run))
+    text = pair_table(passive_run, controlled_run).to_text()
     assert "Story 1 drift" in text and "reduction (%)" in text
     assert f"{1e3 * _peak(passive['drift_1_m']):.3f}" in text
     assert "60.0" in text
 
 
-@pytest.mark.parametrize(("passive", "hybrid", "expected"), [(10.0, 4.0, 60.0), (10.0, 12.0, -20.0), (0.0, 1.0, None), (None, 1.0, None)])
-def test_reduction_percent_follows_the_spec_definition(passive, hybrid, expected) -> None:
-    assert reduction_percent(passive, hybrid) == (pytest.approx(expected) if expected is not None else None)
+def test_html_and_csv_show_the_same_cells_as_the_text(pair) -> None:
+    passive_run, controlled_run, passive, _ = pair
+    table = pair_table(passive_run, controlled_run)
+    html = table.to_html()
+    assert "<th>Quantity</th><th>Unit</th>" in html and "<td>Story 1 drift</td>" in html
+    assert f"<td class='num'>{1e3 * _peak(passive['drift_1_m']):.3f}</td>" in html
+    lines = table.to_csv().splitlines()
+    assert lines[0] == "quantity,key,unit," + ",".join(table.columns)
+    assert len(lines) == 1 + len(table.rows)
 
 
-def test_measured_force_row_reads_force_measured_and_nan_means_not_recorded(tmp_path: Path) -> None:
-    columns = ("t_s", "force_command_N", "force_measured_N")
-    t = np.arange(4.0)
-    measured = write_simulation_case(
-        tmp_path, "a", columns, {"t_s": t, "force_command_N": np.array([0, 100.0, -300, 0]), "force_measured_N": np.array([0, 90.0, -280, 5])},
-        {"total_weight_N": 1000.0},
-    )
-    unmeasured = write_simulation_case(
-        tmp_path, "b", columns, {"t_s": t, "force_command_N": np.ones(4), "force_measured_N": np.full(4, np.nan)}, {"total_weight_N": 1000.0}
-    )
-    assert run_peaks(load_run(measured))["force_percent_weight"] == pytest.approx(30.0)
-    assert run_peaks(load_run(measured))["measured_force_percent_weight"] == pytest.approx(28.0)
-    assert run_peaks(load_run(unmeasured))["measured_force_percent_weight"] is None
+def test_console_table_rows_labels_and_digits(pair) -> None:
+    passive_run, controlled_run, passive, controlled = pair
+    table = reduction_table(run_peaks(passive_run), run_peaks(controlled_run), "title", labels=("passive (sim.)", "dry run"))
+    assert table.headings == ("response", "unit") and table.columns == ("passive (sim.)", "dry run", "reduction %")
+    assert [row.label for row in table.rows] == [
+        "story 3 drift", "story 2 drift", "story 1 drift",
+        "floor 3 abs. acceleration", "floor 2 abs. acceleration", "floor 1 abs. acceleration",
+        "base mat acceleration", "sliding displacement x_b", "peak force",
+    ]
+    drift = table.row("drift_1")
+    assert table.cells(drift)[2:] == [f"{1e3 * _peak(passive['drift_1_m']):.3f}",
+                                      f"{1e3 * _peak(controlled['drift_1_m']):.3f}", "60.0"]
+    assert table.cells(table.row("floor_acceleration_1"))[1] == "m/s²"
+    assert table.cells(table.row("force_percent_weight"))[1:] == ["% weight", "0.00", f"{table.row('force_percent_weight').values[1]:.2f}", "-"]
+    assert table.to_rich().title == "title"
 
 
-def test_report_peaks_agree_with_the_simulators_peak_function(pair) -> None:
-    """harness.peaks serves `harness simulate`; the report must give the same numbers for the same data."""
-    from harness.peaks import flatten, peak_responses
-
-    _, controlled_run, _, _ = pair
-    theirs = flatten(peak_responses(controlled_run.signals, WEIGHT_N))
-    ours = run_peaks(controlled_run)
-    for j in range(1, N_STORIES + 1):
-        assert ours[f"drift_{j}"] == pytest.approx(theirs[f"drift_{j}_m"], rel=1e-12)
-        assert ours[f"floor_acceleration_{j}"] == pytest.approx(theirs[f"floor_acceleration_{j}_m_s2"], rel=1e-12)
-    assert ours["sliding_displacement"] == pytest.approx(theirs["sliding_displacement_m"], rel=1e-12)
-    assert ours["base_acceleration"] == pytest.approx(theirs["base_acceleration_m_s2"], rel=1e-12)
-    assert ours["force_percent_weight"] == pytest.approx(theirs["peak_force_pct_weight"], rel=1e-12)
+def test_console_table_of_a_passive_case_alone(pair) -> None:
+    passive_run, _, _, _ = pair
+    table = reduction_table(run_peaks(passive_run), None, "passive only")
+    assert table.columns == ("passive",) and len(table.rows) == 3 * 2 + 3

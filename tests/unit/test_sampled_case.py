@@ -66,6 +66,6 @@ def test_case_result_adds_peaks_and_wall_time():
     result = case_result("controlled", columns, 1_000.0, 7, started_s=0.0, extra={"outcome": "completed"})
     assert isinstance(result, CaseResult)
     assert result.columns is columns and result.integrator_steps == 7 and result.wall_time_s > 0.0
-    assert result.peaks["sliding_displacement_m"] == pytest.approx(0.02)
-    assert result.peaks["peak_force_pct_weight"] == pytest.approx(5.0)
+    assert result.peaks.sliding_displacement_m == pytest.approx(0.02)
+    assert result.peaks.peak_force_pct_weight == pytest.approx(5.0)
     assert result.extra == {"outcome": "completed"}

@@ -1,0 +1,141 @@
+"""The one table type of peak responses, :class:`PeakTable`, and its renderings.
+
+Rows are quantities (a label and a display unit), columns are cases (runs, simulated
+cases) and derived columns (percent reduction, differences). Cells hold numbers in
+display units (mm, m/s^2, %), None where absent, so tests and other tools read the
+numbers, and each rendering formats them the same way: rich (the console), plain text,
+HTML and CSV. The tables themselves are built in :mod:`harness.report.tables`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass
+from html import escape
+
+from rich.table import Table
+
+#: What an absent cell shows.
+ABSENT = "-"
+
+
+@dataclass(frozen=True)
+class PeakRow:
+    """One quantity's cells.
+
+    Attributes
+    ----------
+    key : str
+        Quantity key (see :class:`harness.report.quantities.Quantity`).
+    label : str
+        Quantity label.
+    unit : str
+        Display unit of the peak values.
+    digits : int
+        Decimals of the quantity's values.
+    values : tuple of (float or None)
+        One cell per table column, in display units (percent columns in %).
+    """
+
+    key: str
+    label: str
+    unit: str
+    digits: int
+    values: tuple[float | None, ...]
+
+    def value(self, column: int) -> float | None:
+        """Cell ``column``."""
+        return self.values[column]
+
+
+@dataclass(frozen=True)
+class PeakTable:
+    """A titled table of quantities (rows) against cases and derived values (columns).
+
+    Attributes
+    ----------
+    title : str
+    headings : tuple of (str, str)
+        Headings of the quantity and unit columns (``("Quantity", "Unit")``).
+    columns : tuple of str
+        Headings of the value columns, after the quantity and unit.
+    rows : tuple of PeakRow
+    digits : tuple of (int or None)
+        Decimals per value column; None: the row's own.
+    note : str
+        One line under the table (sources, definitions).
+    """
+
+    title: str
+    headings: tuple[str, str]
+    columns: tuple[str, ...]
+    rows: tuple[PeakRow, ...]
+    digits: tuple[int | None, ...]
+    note: str = ""
+
+    def row(self, key: str) -> PeakRow:
+        """The row of quantity ``key``."""
+        for row in self.rows:
+            if row.key == key:
+                return row
+        raise KeyError(f"table {self.title!r} has no row {key!r}; it has {', '.join(r.key for r in self.rows)}")
+
+    def cell_text(self, row: PeakRow, column: int) -> str:
+        """Cell ``column`` of ``row``, formatted (:data:`ABSENT` when absent)."""
+        value = row.values[column]
+        if value is None:
+            return ABSENT
+        digits = self.digits[column]
+        return f"{value:.{row.digits if digits is None else digits}f}"
+
+    def cells(self, row: PeakRow) -> list[str]:
+        """Label, unit, then every formatted cell of ``row``."""
+        return [row.label, row.unit, *(self.cell_text(row, i) for i in range(len(self.columns)))]
+
+    def to_rich(self) -> Table:
+        """A rich :class:`~rich.table.Table` for the console (the note as its caption)."""
+        table = Table(title=self.title, title_justify="left", caption=self.note or None, caption_justify="left")
+        table.add_column(self.headings[0], style="bold")
+        table.add_column(self.headings[1])
+        for heading in self.columns:
+            table.add_column(heading, justify="right")
+        for row in self.rows:
+            table.add_row(*self.cells(row))
+        return table
+
+    def to_text(self) -> str:
+        """Fixed-width plain text: title, underline, header, rows, note."""
+        header = [*self.headings, *self.columns]
+        body = [self.cells(row) for row in self.rows]
+        widths = [max(len(line[i]) for line in [header, *body]) for i in range(len(header))]
+        lines = [self.title, "=" * len(self.title), _text_line(header, widths), "  ".join("-" * w for w in widths)]
+        lines += [_text_line(line, widths) for line in body]
+        if self.note:
+            lines.append(self.note)
+        return "\n".join(lines)
+
+    def to_html(self) -> str:
+        """An HTML ``<h2>`` title, ``<table>`` and note (escaped; numbers in ``td.num``)."""
+        head = "<tr>" + "".join(f"<th>{escape(h)}</th>" for h in (*self.headings, *self.columns)) + "</tr>"
+        body = []
+        for row in self.rows:
+            label, unit, *texts = self.cells(row)
+            numbers = "".join(f"<td class='num'>{escape(text)}</td>" for text in texts)
+            body.append(f"<tr><td>{escape(label)}</td><td>{escape(unit)}</td>{numbers}</tr>")
+        note = f"<p class='note'>{escape(self.note)}</p>" if self.note else ""
+        return f"<h2>{escape(self.title)}</h2><table>{head}{''.join(body)}</table>{note}"
+
+    def to_csv(self) -> str:
+        """CSV text: quantity, key, unit, then one column per value column (full precision, empty = absent)."""
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow(["quantity", "key", "unit", *self.columns])
+        for row in self.rows:
+            writer.writerow([row.label, row.key, row.unit, *("" if v is None else repr(float(v)) for v in row.values)])
+        return buffer.getvalue()
+
+
+def _text_line(cells: list[str], widths: list[int]) -> str:
+    """Label columns left-aligned, number columns right-aligned."""
+    return "  ".join(cell.ljust(w) if i < 2 else cell.rjust(w) for i, (cell, w) in enumerate(zip(cells, widths)))
