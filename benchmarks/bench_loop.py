@@ -31,9 +31,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from harness.dryrun import DryRunOptions, dry_run  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
-from harness.study import StudyOptions  # noqa: E402
+from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
+from harness.runs.simulate import StudyOptions  # noqa: E402
 
 RATES_HZ = (250.0, 500.0, 1000.0)
 

@@ -5,11 +5,11 @@ profile values and the same processed table acceleration, and the two are compar
 on peaks and on speed.
 
 The case: ``profiles/eight_story.yaml`` (SPEC 6a), PASSIVE (bearings only, no actuator
-force), El Centro 1940 NS processed by ``harness.study.prepare_motion`` exactly as
+force), El Centro 1940 NS processed by ``harness.runs.simulate.prepare_motion`` exactly as
 ``harness simulate --record el_centro --pga 0.3 --time-scale 1 --duration 30`` does
 (cut, scaled to 0.3 g, baseline-corrected; 0.01 s samples, linear between them).
 
-Ours: ``harness.simulation.run_case`` with no controller (the compiled Dormand-Prince
+Ours: ``harness.simulation.case.run_case`` with no controller (the compiled Dormand-Prince
 kernel, rtol from the profile), sampled at the profile's rate (250 Hz).
 
 OpenSees: a 2D model (ndm 2, ndf 3), one node per level, all at the origin:
@@ -84,11 +84,11 @@ sys.path.insert(0, str(REPO))
 from harness.model.bearing import BearingConfig
 from harness.model.building import GRAVITY_M_S2, BuildingConfig, fixed_base_modes
 from harness.model.plant import Plant, TableMotion
+from harness.motions import GroundMotion
 from harness.peaks import peak_responses
 from harness.profile import Profile, load_profile
-from harness.records import GroundMotion
-from harness.simulation import SamplingSettings, run_case
-from harness.study import StudyOptions, prepare_motion
+from harness.runs.simulate import StudyOptions, prepare_motion
+from harness.simulation.case import SamplingSettings, run_case
 
 PROFILE = REPO / "profiles" / "eight_story.yaml"
 RECORDS_DIR = REPO.parent / "shared" / "data" / "ground_motions"

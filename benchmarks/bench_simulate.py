@@ -30,12 +30,12 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from harness.control.estimator import FrictionEstimator  # noqa: E402
+from harness.control.factory import make_controller  # noqa: E402
 from harness.model.plant import Plant, TableMotion  # noqa: E402
 from harness.model.reference import ReferencePlant  # noqa: E402
+from harness.motions import load_motion  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
-from harness.records import load_motion  # noqa: E402
-from harness.simulation import SamplingSettings, run_case  # noqa: E402
-from harness.control.factory import make_controller  # noqa: E402
+from harness.simulation.case import SamplingSettings, run_case  # noqa: E402
 
 CASES = [
     # (label, profile, record, pga, time scale, controller, rate Hz, target real-time factor)

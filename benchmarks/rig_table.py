@@ -24,7 +24,7 @@ from rich.table import Table  # noqa: E402
 
 from harness.peaks import reduction_pct  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
-from harness.study import StudyOptions, run_study  # noqa: E402
+from harness.runs.simulate import StudyOptions, run_study  # noqa: E402
 
 #: The rig's records and their peak table accelerations (g), SPEC 6b.
 RIG_RECORDS = (("el_centro", 0.34), ("hachinohe", 0.23), ("pacoima", 0.40))

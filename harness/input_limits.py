@@ -22,7 +22,7 @@ from dataclasses import dataclass
 MAX_RATE_HZ = 5000.0
 
 #: Largest target peak table acceleration (g): the records' plausibility bound
-#: (:data:`harness.records.checks.MAX_ABS_ACCEL_G`, 10 g, which no record reaches); a table's own
+#: (:data:`harness.motions.checks.MAX_ABS_ACCEL_G`, 10 g, which no record reaches); a table's own
 #: limit (``table.acceleration_limit_g``) then refuses what that table cannot do.
 MAX_PGA_G = 10.0
 

@@ -35,7 +35,7 @@ from harness.rowlayout import (
 )
 
 if TYPE_CHECKING:
-    from harness.record.reader import RunData
+    from harness.recording.reader import RunData
 
 #: The control force u of SPEC 5, best source first: the supervised command sent to the
 #: actuator, else the controller's raw output. A column without a finite value is skipped.
@@ -185,7 +185,7 @@ def peak_responses(
 
 
 def run_peaks(run: RunData) -> Peaks:
-    """Peaks of a run folder read back (:func:`harness.record.load_run`), over all its rows.
+    """Peaks of a run folder read back (:func:`harness.recording.load_run`), over all its rows.
 
     The weight is the metadata's ``total_weight_N``; a run is passive when its case or
     controller is ``"passive"``.

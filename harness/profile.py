@@ -41,7 +41,7 @@ from harness.errors import ProfileError
 from harness.loop.config import LoopConfig
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
-from harness.records import RecordConfig, TableLimits
+from harness.motions import RecordConfig, TableLimits
 from harness.rig.config import RigConfig
 from harness.safety.config import SafetyConfig, check_config
 from harness.safety.weakening import Weakening, weakenings

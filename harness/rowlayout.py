@@ -8,16 +8,16 @@ column order; every writer and reader uses the names below:
   through positions looked up here by name, once; ``harness run`` and ``harness dry-run``
   record that row as ``signals.csv``, in that order;
 - the plant (:meth:`harness.model.plant.Plant.responses`) derives :func:`plant_columns`;
-- the offline simulator (:func:`harness.simulation.run_case`) adds what the controller
+- the offline simulator (:func:`harness.simulation.case.run_case`) adds what the controller
   computed: :func:`simulation_columns`;
-- the rig twin (:func:`harness.twin.run_rig_twin`) records what a dry run measures:
+- the rig twin (:func:`harness.simulation.twin.run_rig_twin`) records what a dry run measures:
   :data:`TWIN_COLUMNS`;
 - readers and reports find stories and units with :func:`count_stories` and :func:`unit_of`.
 
 Why a module of its own, at the top of the package: the model, the loop, the twin and the
 recorder all need the names, and none should import another's package for them (importing
-:mod:`harness.record` starts the recorder's machinery; the model is pure). This module
-imports nothing. :mod:`harness.record.columns` re-exports it for the record package's API.
+:mod:`harness.recording` starts the recorder's machinery; the model is pure). This module
+imports nothing. The recording package re-exports its names for run-folder users.
 
 Every name ends in its unit (``_m``, ``_m_s``, ``_m_s2``, ``_N``, ``_s``) or is
 dimensionless. Stories are numbered from 1 at the bottom (story 1 sits on the base mat).

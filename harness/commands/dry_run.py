@@ -68,8 +68,8 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace, console: Console) -> int:
-    from harness.dryrun import DryRunOptions, dry_run
     from harness.report.tables import reduction_table
+    from harness.runs.dry_run import DryRunOptions, dry_run
 
     profile = load_acknowledged(args, console)
     options = DryRunOptions(

@@ -136,7 +136,7 @@ def add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> N
 
 
 def study_options(args: argparse.Namespace, **extra):
-    from harness.study import StudyOptions
+    from harness.runs.simulate import StudyOptions
 
     return StudyOptions(
         record=args.record, records_dir=args.records_dir, pga_g=args.pga, time_scale=args.time_scale,

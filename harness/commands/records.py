@@ -50,9 +50,9 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from rich.table import Table
 
+    from harness.motions import list_records, records_dir_from, summarize
     from harness.profile import load_profile
-    from harness.records import list_records, records_dir_from, summarize
-    from harness.study import prepare_motion
+    from harness.runs.simulate import prepare_motion
 
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     if args.record is None:

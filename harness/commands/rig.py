@@ -49,8 +49,8 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace, console: Console) -> int:
-    from harness.rig.command import serve_rig
-    from harness.study import resolve_profile
+    from harness.runs.rig_service import serve_rig
+    from harness.runs.simulate import resolve_profile
 
     with stop_on_signals():
         profile = load_acknowledged(args, console)  # the rig serves the harness's profile: the same acknowledgement

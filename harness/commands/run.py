@@ -76,9 +76,9 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from pathlib import Path
 
-    from harness.dryrun import LOG_DIR
-    from harness.session import SessionSettings, run_session
-    from harness.study import motion_facts, prepare_motion, resolve_profile
+    from harness.runs.dry_run import LOG_DIR
+    from harness.runs.session import SessionSettings, run_session
+    from harness.runs.simulate import motion_facts, prepare_motion, resolve_profile
 
     profile = load_acknowledged(args, console)
     profile = resolve_profile(profile, study_options(args, controller=args.controller, rate_hz=args.rate))

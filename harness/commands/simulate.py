@@ -68,7 +68,7 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.profile import load_profile
     from harness.report.tables import reduction_table
-    from harness.study import run_study
+    from harness.runs.simulate import run_study
 
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     options = study_options(
@@ -112,7 +112,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         result.write_json(args.json)
         console.print(f"wrote {args.json}")
     if args.out:
-        from harness.study_output import write_study_folders
+        from harness.runs.simulate_output import write_study_folders
 
         folder = write_study_folders(result, args.out)
         console.print(f"wrote time series to {folder}")

@@ -7,7 +7,12 @@ from dataclasses import dataclass
 from typing import Literal
 
 from harness.control.designs import ControllerDesign
-from harness.input_limits import MAX_DELAY_S, MAX_RATE_HZ, MAX_STIFFNESS_SCALE, MIN_STIFFNESS_SCALE
+from harness.input_limits import (
+    MAX_DELAY_S,
+    MAX_RATE_HZ,
+    MAX_STIFFNESS_SCALE,
+    MIN_STIFFNESS_SCALE,
+)
 from harness.schema import quantity
 
 

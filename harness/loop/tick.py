@@ -24,7 +24,6 @@ from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
 
-
 # Positions in the row (harness.rowlayout.CONTROL_ROW) of what the tick records, looked up by
 # name once, at import. Module constants: a store through one costs what a literal index costs
 # (a global load), less than through an instance attribute.

@@ -4,7 +4,7 @@ The state integrated is ``y = (Z, nu)``: the building state of
 :mod:`harness.model.building` followed by the Bouc-Wen variable. Between two
 controller samples the actuator force ``u`` is constant (zero-order hold, SPEC 3),
 and the table motion follows the piecewise-linear-acceleration rule of
-:mod:`harness.records` exactly, so the kernel reproduces the table's displacement
+:mod:`harness.motions` exactly, so the kernel reproduces the table's displacement
 and velocity between record samples without any extra interpolation error.
 
 Eq. 5 is stiff: with D_y of tens of micrometres nu swings from -1 to +1 within a

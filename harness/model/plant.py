@@ -13,14 +13,19 @@ import numpy as np
 from drivers.measurements import Measurements
 from harness import rowlayout as layout
 from harness.model.bearing import BearingConfig, friction_force
-from harness.model.building import BuildingConfig, StateSpace, acceleration_maps, state_space
+from harness.model.building import (
+    BuildingConfig,
+    StateSpace,
+    acceleration_maps,
+    state_space,
+)
 from harness.model.integrator import advance, default_atol, make_work, table_state
 
 
 @dataclass(frozen=True)
 class TableMotion:
     """Table acceleration, velocity and displacement samples, consistent under the
-    piecewise-linear-acceleration rule (see :mod:`harness.records`)."""
+    piecewise-linear-acceleration rule (see :mod:`harness.motions`)."""
 
     dt_s: float
     accel_m_s2: np.ndarray

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness.record.reader import RunData, load_runs
+from harness.recording.reader import RunData, load_runs
 from harness.report.figure import PlotFile
 from harness.report.html import report_html
 from harness.report.peak_table import PeakTable

@@ -15,7 +15,7 @@ from pathlib import Path
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from harness.record.reader import RunData
+from harness.recording.reader import RunData
 
 DPI = 100
 WIDTH_PX = 1200

@@ -11,7 +11,7 @@ import datetime as _dt
 from collections.abc import Sequence
 from html import escape
 
-from harness.record.reader import RunData
+from harness.recording.reader import RunData
 from harness.report.figure import PlotFile
 from harness.report.peak_table import PeakTable
 

@@ -14,7 +14,7 @@ def motion_plot(motion, path: str | Path) -> PlotFile:
 
     Parameters
     ----------
-    motion : harness.records.GroundMotion
+    motion : harness.motions.GroundMotion
     path : str or Path
         The PNG to write (its folder is created).
     """

@@ -16,9 +16,9 @@ import numpy as np
 from matplotlib.axes import Axes
 
 from harness.peaks import run_peaks
-from harness.record.columns import drift
-from harness.record.reader import RunData
+from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
+from harness.rowlayout import drift
 
 EVENT_KINDS = ("trip", "interlock", "warning")
 _MAX_EVENT_LABELS = 12

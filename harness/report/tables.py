@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from harness.peaks import Peaks, force_column, reduction_pct, run_peaks
-from harness.record.reader import RunData
+from harness.recording.reader import RunData
 from harness.report.peak_table import PeakRow, PeakTable
 from harness.report.quantities import (
     CONSOLE_WORDING,

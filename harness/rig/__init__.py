@@ -38,24 +38,8 @@ The lockstep contract (the harness's lockstep loop is written to it):
    start reports record time ``k T``. In real time the record starts at the next
    sub-step. Command 2 holds the table where it is; 3 resets the plant to rest,
    clears latched drive faults and sets ``step_index`` to 0.
+
+Import what you need from its module: :mod:`harness.rig.virtual_rig` (``VirtualRig``),
+:mod:`harness.rig.parts`, :mod:`harness.rig.config`. The package imports nothing, so the
+profile can import :mod:`harness.rig.config` without pulling in the rig.
 """
-
-from harness.rig.config import RigConfig
-
-__all__ = ["RigConfig", "RigParts", "RigState", "VirtualRig", "run_rig_command"]
-
-_LAZY = {
-    "RigParts": "harness.rig.parts",
-    "RigState": "harness.rig.parts",
-    "VirtualRig": "harness.rig.virtual_rig",
-    "run_rig_command": "harness.rig.command",
-}
-
-
-def __getattr__(name: str):
-    """Import the heavy parts on first use (``harness.profile`` imports :mod:`.config` from here)."""
-    if name not in _LAZY:
-        raise AttributeError(f"module 'harness.rig' has no attribute {name!r}")
-    import importlib
-
-    return getattr(importlib.import_module(_LAZY[name]), name)

@@ -12,7 +12,6 @@ import math
 import numpy as np
 
 from harness.memory import prefaulted_zeros
-
 from harness.model.plant import Plant
 
 RIG_TIME, RECORD_TIME, FORCE, STATE = 0, 1, 2, 3

@@ -15,8 +15,17 @@ import can
 from drivers.e2e import COUNTER_MODULO
 from drivers.protocol_values import EstopSource
 from drivers.writer import RigWriter, TxFrame
-from harness.rig import faults as F
-from harness.rig.faults import TARGETS, FaultSet
+from harness.rig.faults import (
+    BUS_SILENCE,
+    CORRUPT_CRC,
+    DROPOUT,
+    NOISE_BURST,
+    REPEAT_COUNTER,
+    SKIP_COUNTER,
+    STUCK,
+    TARGETS,
+    FaultSet,
+)
 from harness.rig.sensors import MESSAGE_COLUMNS, SensorModel
 
 
@@ -54,9 +63,9 @@ class RigPublisher:
         """Measure and send sensor message ``target`` (0..3); False if nothing went out."""
         faults = self.faults
         values = self._values[target]
-        if faults.is_on(F.STUCK, target):
+        if faults.is_on(STUCK, target):
             return self.send(target, values, now)  # the values last sent, again
-        burst = faults.param[F.NOISE_BURST, target] if faults.is_on(F.NOISE_BURST, target) else 0.0
+        burst = faults.param[NOISE_BURST, target] if faults.is_on(NOISE_BURST, target) else 0.0
         self.sensors.read(MESSAGE_COLUMNS[target], values, abs(burst))
         flipped = faults.flipped_signal(target)
         if flipped >= 0:
@@ -82,7 +91,7 @@ class RigPublisher:
 
     def estop(self, now: float) -> bool:
         """Send an active ESTOP from the rig (source ``RIG``)."""
-        if self.faults.is_on(F.BUS_SILENCE):
+        if self.faults.is_on(BUS_SILENCE):
             self.suppressed += 1
             return False
         return self.writer.send_frame(self._estop, self._estop_values, now)
@@ -93,7 +102,7 @@ class RigPublisher:
         The panel is a node of its own on a real rig; the virtual rig emulates it on its own
         ESTOP frame (one rolling counter for the rig's and the panel's frames on this ID).
         """
-        if self.faults.is_on(F.BUS_SILENCE):
+        if self.faults.is_on(BUS_SILENCE):
             self.suppressed += 1
             return False
         self._panel_values[0] = 1.0 if pressed else 0.0
@@ -105,15 +114,15 @@ class RigPublisher:
     def send(self, target: int, values: list[float], now: float) -> bool:
         """Send message ``target`` with ``values``, applying the frame-level faults."""
         faults = self.faults
-        if faults.is_on(F.BUS_SILENCE) or faults.is_on(F.DROPOUT, target):
+        if faults.is_on(BUS_SILENCE) or faults.is_on(DROPOUT, target):
             self.suppressed += 1
             return False
         tx = self.frames[target]
-        if faults.is_on(F.REPEAT_COUNTER, target) and tx.sent:
+        if faults.is_on(REPEAT_COUNTER, target) and tx.sent:
             tx.counter = (tx.counter - 1) % COUNTER_MODULO
-        elif faults.is_on(F.SKIP_COUNTER, target):
+        elif faults.is_on(SKIP_COUNTER, target):
             tx.counter = (tx.counter + 1) % COUNTER_MODULO
-        if faults.is_on(F.CORRUPT_CRC, target):
+        if faults.is_on(CORRUPT_CRC, target):
             ok = self._send_corrupted(tx, values, now)
         else:
             ok = self.writer.send_frame(tx, values, now)

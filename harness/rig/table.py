@@ -18,7 +18,7 @@ from harness.model.building import BuildingConfig, acceleration_maps
 from harness.model.plant import Plant, TableMotion
 
 if TYPE_CHECKING:
-    from harness.records import GroundMotion
+    from harness.motions import GroundMotion
 
 
 class TablePlant:

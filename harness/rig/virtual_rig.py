@@ -21,7 +21,6 @@ import math
 import threading
 import time
 from collections.abc import Callable
-
 from typing import TYPE_CHECKING
 
 import can
@@ -32,11 +31,17 @@ from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from drivers.writer import RigWriter
 from harness.can_config import CanConfig
 from harness.errors import ModelError
-from harness.rig import faults as F
-from harness.rig import inbox as rx
+from harness.rig import inbox
 from harness.rig.actuator import ServoActuator
 from harness.rig.drive import Drive
-from harness.rig.faults import FaultSet, schedule_from
+from harness.rig.faults import (
+    DRIVE_FAULT,
+    ESTOP,
+    MAX_EXTRA_DELAY_S,
+    PRESSURE_LOST,
+    FaultSet,
+    schedule_from,
+)
 from harness.rig.history import History, record_columns
 from harness.rig.inbox import RigInbox
 from harness.rig.parts import RigParts, RigState
@@ -48,8 +53,8 @@ from harness.rig.table import TablePlant
 
 if TYPE_CHECKING:
     from drivers.link import RigLink
+    from harness.motions import GroundMotion
     from harness.profile import Profile
-    from harness.records import GroundMotion
 
 class VirtualRig:
     """The 4-DOF rig on a CAN bus.
@@ -106,7 +111,7 @@ class VirtualRig:
         seeds = np.random.SeedSequence(cfg.seed if seed is None else seed).spawn(2)
         self._force_rng = np.random.default_rng(seeds[1])
         self.table = TablePlant(parts.building, parts.bearing, motion, parts.rtol)
-        self.sensors = SensorModel(cfg.sensors, self.h, 3.0 + F.MAX_EXTRA_DELAY_S, np.random.default_rng(seeds[0]))
+        self.sensors = SensorModel(cfg.sensors, self.h, 3.0 + MAX_EXTRA_DELAY_S, np.random.default_rng(seeds[0]))
         self.actuator = ServoActuator(cfg.actuator, self.h, cfg.drive.decay_time_constant_s)
         self.drive = Drive(cfg.drive.watchdog_timeout_s)
         self.faults = FaultSet(schedule_from(cfg.faults))
@@ -169,7 +174,7 @@ class VirtualRig:
     @property
     def pressure_ok(self) -> bool:
         """Hydraulic pressure present (no pressure-lost fault)."""
-        return not self.faults.is_on(F.PRESSURE_LOST)
+        return not self.faults.is_on(PRESSURE_LOST)
 
     def _update_faults(self) -> None:
         self.faults.update(self.table.record_time_s if self.table.started else None)
@@ -177,11 +182,11 @@ class VirtualRig:
 
     def _update_drive(self, now: float) -> None:
         faults = self.faults
-        if faults.is_on(F.ESTOP):
+        if faults.is_on(ESTOP):
             self.drive.on_estop()
         code = 0
-        if faults.is_on(F.DRIVE_FAULT):
-            code = int(min(max(faults.param[F.DRIVE_FAULT, 0], 0.0), 255.0)) or FaultCode.INJECTED
+        if faults.is_on(DRIVE_FAULT):
+            code = int(min(max(faults.param[DRIVE_FAULT, 0], 0.0), 255.0)) or FaultCode.INJECTED
         drive = self.config.drive
         self.drive.timeout_s = drive.lockstep_watchdog_timeout_s if self.lockstep else drive.watchdog_timeout_s
         self.drive.update(now, self.pressure_ok, code)
@@ -222,7 +227,7 @@ class VirtualRig:
             pub.sensor(2, now)
             pub.sensor(3, now)
         self._publish_status(now)
-        if self.faults.is_on(F.ESTOP):
+        if self.faults.is_on(ESTOP):
             pub.estop(now)
         if self.step_index >= self._panel_next_step:  # on the step grid: ages are judged on the loop's time
             self._panel_next_step = self.step_index + self._panel_every_steps
@@ -258,7 +263,7 @@ class VirtualRig:
             pub.sensor(3, now)
         if due.status:
             self._publish_status(now)
-            if self.faults.is_on(F.ESTOP):
+            if self.faults.is_on(ESTOP):
                 pub.estop(now)
         if due.rig_status:
             self._publish_rig_status(now)
@@ -289,7 +294,7 @@ class VirtualRig:
             self._publish_lockstep(now)
 
     def _handle(self, kind: int, now: float) -> None:
-        if kind == rx.COMMAND:
+        if kind == inbox.COMMAND:
             # Record the command before the watchdog judges: a frame that arrived is proof
             # the harness is alive, even when this rig was the one that stalled.
             enable, force = self.inbox.command
@@ -297,12 +302,12 @@ class VirtualRig:
             self._update_drive(now)
             if self.lockstep:
                 self._step(now)
-        elif kind == rx.HEARTBEAT:
+        elif kind == inbox.HEARTBEAT:
             self.drive.on_heartbeat(now)
             self._update_drive(now)
-        elif kind == rx.CONTROL:
+        elif kind == inbox.CONTROL:
             self._on_control(now)
-        elif kind == rx.ESTOP:
+        elif kind == inbox.ESTOP:
             self.drive.on_estop()
 
     def _after_frames(self, now: float) -> None:
@@ -345,7 +350,7 @@ class VirtualRig:
                 self._advance_to(now)
             handled = 0
             kind = self.inbox.receive(wait_s)
-            while kind != rx.NOTHING:
+            while kind != inbox.NOTHING:
                 handled += 1
                 self._handle(kind, now if wait_s == 0.0 else self.clock())
                 kind = self.inbox.receive(0.0)

@@ -8,7 +8,6 @@ from harness.safety.detector_base import Detector
 from harness.safety.events import Action
 from harness.safety.health import TickHealth
 
-
 #: What to do about a loop that the host keeps from running (printed with the trip).
 HOST_TIMING_REMEDIES = (
     "remedies: a lower --rate, --lockstep for a dry run, real-time priority "

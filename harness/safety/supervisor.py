@@ -38,7 +38,12 @@ from __future__ import annotations
 import math
 
 from harness.errors import ProfileError
-from harness.safety.actuator_detectors import ActuatorStatusStale, DriveFault, ForceTracking, HydraulicPressure
+from harness.safety.actuator_detectors import (
+    ActuatorStatusStale,
+    DriveFault,
+    ForceTracking,
+    HydraulicPressure,
+)
 from harness.safety.comms_detectors import (
     BusErrorFrames,
     BusErrorPassive,
@@ -52,9 +57,21 @@ from harness.safety.config import SafetyConfig, check_config
 from harness.safety.detector_base import TIME_EPS_S, Detector
 from harness.safety.events import CHECK_NAMES, Action, EventKind, EventRing, bit, index
 from harness.safety.health import TickHealth
-from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
+from harness.safety.interlocks import (
+    ForceClamp,
+    ForceRateLimit,
+    StrokeHardLimit,
+    StrokePredictiveLimit,
+    StrokeSoftFade,
+)
 from harness.safety.lifecycle import DRIVE_STATES, Lifecycle, State
-from harness.safety.operator_detectors import EStop, EStopLost, LoopStall, OperatorStop, OperatorTrip
+from harness.safety.operator_detectors import (
+    EStop,
+    EStopLost,
+    LoopStall,
+    OperatorStop,
+    OperatorTrip,
+)
 from harness.safety.prearm import pre_arm_failures
 from harness.safety.sensor_detectors import (
     SensorDisagree,

@@ -10,7 +10,12 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from harness.safety.actuator_detectors import ActuatorStatusStale, DriveFault, ForceTracking, HydraulicPressure
+from harness.safety.actuator_detectors import (
+    ActuatorStatusStale,
+    DriveFault,
+    ForceTracking,
+    HydraulicPressure,
+)
 from harness.safety.comms_detectors import (
     BusErrorFrames,
     BusErrorPassive,
@@ -21,8 +26,20 @@ from harness.safety.comms_detectors import (
     ForeignCommand,
 )
 from harness.safety.events import CHECK_NAMES, Action
-from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
-from harness.safety.operator_detectors import EStop, EStopLost, LoopStall, OperatorStop, OperatorTrip
+from harness.safety.interlocks import (
+    ForceClamp,
+    ForceRateLimit,
+    StrokeHardLimit,
+    StrokePredictiveLimit,
+    StrokeSoftFade,
+)
+from harness.safety.operator_detectors import (
+    EStop,
+    EStopLost,
+    LoopStall,
+    OperatorStop,
+    OperatorTrip,
+)
 from harness.safety.sensor_detectors import (
     SensorDisagree,
     SensorInvalid,

@@ -155,7 +155,7 @@ BAD_ARGUMENTS = {
 
 
 def _run_folder(parent: Path, name: str, rows: int = 40) -> Path:
-    from harness.record import RunFolder, canonical_columns
+    from harness.recording import RunFolder, canonical_columns
 
     columns = canonical_columns(3)
     run = RunFolder.create(parent, "p", "dry-run", {}, columns)

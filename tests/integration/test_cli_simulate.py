@@ -7,7 +7,7 @@ import json
 import pytest
 
 from harness.cli import main
-from harness.record.reader import load_run
+from harness.recording.reader import load_run
 from tests.conftest import PROFILES
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from harness import exit_codes
 from harness.cli import main
-from harness.record import load_run
+from harness.recording import load_run
 from harness.safety.lifecycle import State
 
 LOCKSTEP = ["--lockstep", "--quiet"]
@@ -145,7 +145,7 @@ def test_sigterm_trips(tmp_path, capsys):
 
 
 def test_a_raising_controller_trips_and_never_kills_the_process(tmp_path, capsys, monkeypatch):
-    import harness.session as session
+    import harness.runs.session as session
 
     real = session.build_controller_for_rig
 

@@ -11,7 +11,7 @@ import pytest
 from harness import exit_codes
 from harness.cli import main
 from harness.profile import load_profile
-from harness.record import load_run
+from harness.recording import load_run
 
 FAULT_AT_S = 1.0  # record time of the fault's onset
 PERIOD_S = 0.002  # 500 Hz

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from harness import exit_codes
-from harness.record import load_run
+from harness.recording import load_run
 from harness.safety.lifecycle import State
 
 DURATION_S = 10.0

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from harness import exit_codes
-from harness.session import SessionResult
+from harness.runs.session import SessionResult
 from tests.conftest import REPO
 
 #: Bytes any one file may grow to: the run's profile.yaml and metadata.json fit (a few kB),

@@ -26,11 +26,18 @@ from harness.can_config import CanConfig
 from harness.can_link import open_harness, open_rig
 from harness.errors import BusError
 from harness.profile import load_profile
-from harness.rig.config import ActuatorConfig, DisplacementSensorConfig, DriveConfig, FaultSpec, RigConfig, SensorsConfig
-from harness.rig.command import run_rig_command
+from harness.rig.config import (
+    ActuatorConfig,
+    DisplacementSensorConfig,
+    DriveConfig,
+    FaultSpec,
+    RigConfig,
+    SensorsConfig,
+)
 from harness.rig.faults import fault_id_for
 from harness.rig.virtual_rig import RigParts, VirtualRig
-from harness.study import StudyOptions, prepare_motion
+from harness.runs.rig_service import run_rig_command
+from harness.runs.simulate import StudyOptions, prepare_motion
 from tests.conftest import PROFILES
 
 PERIOD = 0.002
@@ -468,8 +475,8 @@ def test_a_failed_bus_ends_the_service_thread_with_the_error(bench):
 def test_ctrl_c_stops_a_rig_process_cleanly():
     code = (
         "import sys\n"
-        "from harness.rig import run_rig_command\n"
-        "from harness.study import StudyOptions\n"
+        "from harness.runs.rig_service import run_rig_command\n"
+        "from harness.runs.simulate import StudyOptions\n"
         f"sys.exit(run_rig_command({str(PROFILES / 'nceer_4dof.yaml')!r}, interface='virtual', channel='sigint', "
         "options=StudyOptions(record='synthetic', duration_s=3.0), on_ready=lambda rig: print('ready', flush=True)))\n"
     )

@@ -12,7 +12,7 @@ from __future__ import annotations
 import pytest
 
 from harness.profile import load_profile
-from harness.study import StudyOptions, run_study
+from harness.runs.simulate import StudyOptions, run_study
 from tests.conftest import PROFILES
 
 RIG_PROFILE = PROFILES / "nceer_4dof.yaml"

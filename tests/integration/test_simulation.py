@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from harness.control.estimator import FrictionEstimator
+from harness.control.factory import make_controller
 from harness.model.plant import Plant, TableMotion
 from harness.model.reference import ReferencePlant
+from harness.motions import load_motion
 from harness.profile import load_profile
-from harness.records import load_motion
 from harness.rowlayout import simulation_columns
-from harness.simulation import SamplingSettings, run_case
-from harness.control.factory import make_controller
+from harness.simulation.case import SamplingSettings, run_case
 from tests.conftest import PROFILES
 
 PEAK_TOLERANCE = 0.01  # every peak within 1 % of the reference (issue 2)

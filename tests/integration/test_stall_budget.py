@@ -18,13 +18,13 @@ import pytest
 
 from harness.can_link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
+from harness.control.factory import build_controller_for_rig
 from harness.loop.runner import ControlLoop
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile
 from harness.rig.virtual_rig import VirtualRig
+from harness.runs.simulate import StudyOptions, prepare_motion
 from harness.safety.supervisor import Supervisor
-from harness.control.factory import build_controller_for_rig
-from harness.study import StudyOptions, prepare_motion
 
 RATE_HZ = 500.0
 PERIOD_S = 1.0 / RATE_HZ

@@ -11,12 +11,12 @@ import json
 import pytest
 
 from drivers.protocol_values import DriveState
-from harness.dryrun import DryRunOptions, dry_run
 from harness.loop.runner import ArmTimeout
 from harness.profile import load_profile
-from harness.record import load_run
+from harness.recording import load_run
 from harness.rig.virtual_rig import VirtualRig
-from harness.study import StudyOptions
+from harness.runs.dry_run import DryRunOptions, dry_run
+from harness.runs.simulate import StudyOptions
 
 FAULT_AT_S = 1.0
 PERIOD_S = 0.002
@@ -47,11 +47,11 @@ class WatchedRig(VirtualRig):
 
 @pytest.fixture
 def watched(monkeypatch):
-    import harness.rig
+    import harness.rig.virtual_rig
 
     WatchedRig.made = []
     WatchedRig.unplug_panel = False
-    monkeypatch.setattr(harness.rig, "VirtualRig", WatchedRig, raising=False)
+    monkeypatch.setattr(harness.rig.virtual_rig, "VirtualRig", WatchedRig)
     return WatchedRig
 
 

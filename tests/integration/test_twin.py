@@ -6,9 +6,9 @@ import numpy as np
 
 from harness import rowlayout as layout
 from harness.control.factory import build_controller_for_rig
+from harness.motions import load_motion
 from harness.profile import load_profile
-from harness.records import load_motion
-from harness.twin import run_rig_twin
+from harness.simulation.twin import run_rig_twin
 from tests.conftest import PROFILES
 
 RATE_HZ = 500.0

@@ -5,7 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.model.building import BuildingConfig, acceleration_maps, fixed_base_modes, state_space
+from harness.model.building import (
+    BuildingConfig,
+    acceleration_maps,
+    fixed_base_modes,
+    state_space,
+)
 
 
 def test_eight_story_first_mode_matches_spec(eight):

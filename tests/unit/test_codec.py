@@ -9,7 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drivers.codec import DEFAULT_DBC, MessageCodec, check_protocol_version, load_protocol
+from drivers.codec import (
+    DEFAULT_DBC,
+    MessageCodec,
+    check_protocol_version,
+    load_protocol,
+)
 from drivers.decoder import Decoder, RxStatus
 from drivers.e2e import protect
 from harness.errors import ProtocolError

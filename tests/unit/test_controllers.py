@@ -17,7 +17,13 @@ from harness.control.designs import (
     build_controller,
     state_names,
 )
-from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups, regular_form, sliding_poles
+from harness.control.surfaces import (
+    lqr_surface,
+    pole_surface,
+    q_diagonal_from_groups,
+    regular_form,
+    sliding_poles,
+)
 from harness.errors import ModelError
 from harness.model.building import state_space
 

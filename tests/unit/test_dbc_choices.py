@@ -19,7 +19,13 @@ import pytest
 from drivers.codec import DEFAULT_DBC, load_protocol
 from drivers.decoder import Decoder, RxStatus
 from drivers.errors import ProtocolError
-from drivers.protocol_values import VALUE_TABLES, DriveState, FaultCode, RigCommand, choices_of
+from drivers.protocol_values import (
+    VALUE_TABLES,
+    DriveState,
+    FaultCode,
+    RigCommand,
+    choices_of,
+)
 from harness.safety.lifecycle import State
 
 PROTOCOL = load_protocol()

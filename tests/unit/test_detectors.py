@@ -8,7 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from harness.safety.actuator_detectors import ActuatorStatusStale, DriveFault, ForceTracking, HydraulicPressure
+from harness.profile import load_profile
+from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
+from harness.safety.actuator_detectors import (
+    ActuatorStatusStale,
+    DriveFault,
+    ForceTracking,
+    HydraulicPressure,
+)
 from harness.safety.comms_detectors import (
     BusErrorFrames,
     BusErrorPassive,
@@ -18,13 +25,22 @@ from harness.safety.comms_detectors import (
     E2eRejects,
     ForeignCommand,
 )
-from harness.safety.config import ActuatorConfig, CommsConfig, ForceConfig, RunConfig, SensorConfig
+from harness.safety.config import (
+    ActuatorConfig,
+    CommsConfig,
+    ForceConfig,
+    RunConfig,
+    SensorConfig,
+)
 from harness.safety.detector_base import Persistence, WindowCounter
 from harness.safety.events import CHECK_NAMES, Action
 from harness.safety.health import TickHealth
-from harness.safety.operator_detectors import EStop, LoopStall, OperatorStop, OperatorTrip
-from harness.profile import load_profile
-from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
+from harness.safety.operator_detectors import (
+    EStop,
+    LoopStall,
+    OperatorStop,
+    OperatorTrip,
+)
 from harness.safety.sensor_detectors import (
     CHANNELS,
     SensorDisagree,

@@ -9,7 +9,13 @@ import pytest
 from harness.errors import ProfileError
 from harness.safety.config import ForceConfig, SafetyConfig, StrokeConfig, check_config
 from harness.safety.events import Action
-from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
+from harness.safety.interlocks import (
+    ForceClamp,
+    ForceRateLimit,
+    StrokeHardLimit,
+    StrokePredictiveLimit,
+    StrokeSoftFade,
+)
 from harness.schema import build
 
 STROKE = StrokeConfig(soft_limit_m=0.05, fade_band_m=0.01, hard_limit_m=0.075, stop_time_s=0.1)

@@ -17,7 +17,7 @@ from harness.peaks import (
     reduction_pct,
     run_peaks,
 )
-from harness.record import load_run, write_simulation_case
+from harness.recording import load_run, write_simulation_case
 
 WEIGHT_N = 1000.0
 

@@ -11,7 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.record import RunFolder, RunFolderError, canonical_columns, write_simulation_case
+from harness.recording import (
+    RunFolder,
+    RunFolderError,
+    canonical_columns,
+    write_simulation_case,
+)
 from harness.report import build_report, summary_text
 from harness.report.figure import WIDTH_PX
 from harness.report.plots import drift_height_px

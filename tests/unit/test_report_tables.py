@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harness.peaks import run_peaks
-from harness.record import (
+from harness.recording import (
     RunData,
     canonical_columns,
     load_run,

@@ -6,10 +6,16 @@ import pytest
 
 from drivers.protocol_values import DriveState, FaultCode
 from harness.errors import ProfileError
-from harness.rig.drive import Drive
 from harness.rig import faults as F
 from harness.rig.config import FaultSpec, RigConfig
-from harness.rig.faults import FaultError, FaultSet, decode_fault_id, fault_id_for, schedule_from
+from harness.rig.drive import Drive
+from harness.rig.faults import (
+    FaultError,
+    FaultSet,
+    decode_fault_id,
+    fault_id_for,
+    schedule_from,
+)
 from harness.schema import build
 
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
+import harness.recording as recording
 from drivers.codec import load_protocol
 from harness import rowlayout as layout
-from harness.record import columns as record_columns
-from harness.record.layout import check_columns
+from harness.recording.layout import check_columns
 from harness.rig.sensors import SIGNALS
 
 #: signals.csv of a run or dry run, column by column, as written before the layout moved here
@@ -78,6 +78,6 @@ def test_count_stories_inverts_drift():
     assert layout.count_stories(layout.plant_columns(8)) == 8
 
 
-def test_the_record_package_re_exports_the_same_definitions():
-    for name in record_columns.__all__:
-        assert getattr(record_columns, name) is getattr(layout, name)
+def test_the_recording_package_exports_the_same_definitions():
+    for name in ("canonical_columns", "drift", "floor_acceleration", "unit_of"):
+        assert getattr(recording, name) is getattr(layout, name)

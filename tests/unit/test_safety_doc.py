@@ -8,11 +8,11 @@ from functools import cache
 
 import pytest
 
+from harness.control.factory import build_controller_for_rig
 from harness.errors import ProfileError
 from harness.profile import load_profile
 from harness.safety import SAFETY_TABLE
 from harness.safety.events import CHECK_NAMES
-from harness.control.factory import build_controller_for_rig
 from tests.conftest import PROFILES, REPO
 
 DOC = REPO / "docs" / "SAFETY.md"

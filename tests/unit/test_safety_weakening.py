@@ -15,7 +15,14 @@ from harness.errors import ProfileError
 from harness.loop.status import LoopStatus
 from harness.profile import command_force_limit_N, load_profile
 from harness.safety.config import SafetyConfig
-from harness.safety.weakening import DIRECTIONS, FLAG, is_weaker, require_acknowledged, safety_fields, weakenings
+from harness.safety.weakening import (
+    DIRECTIONS,
+    FLAG,
+    is_weaker,
+    require_acknowledged,
+    safety_fields,
+    weakenings,
+)
 from tests.conftest import PROFILES, REPO
 
 RIG = PROFILES / "nceer_4dof.yaml"

@@ -1,11 +1,11 @@
-"""harness.sampled_case: the per-sample arrays and loop the simulator and the rig twin share."""
+"""harness.simulation.sampled: the per-sample arrays and loop the simulator and the rig twin share."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from harness.sampled_case import CaseResult, CaseSamples, case_result
+from harness.simulation.sampled import CaseResult, CaseSamples, case_result
 
 
 class Counter:

@@ -30,8 +30,13 @@ from drivers import seqpacket
 from drivers.bus import is_queue_full
 from drivers.errors import BusError
 from drivers.seqpacket import (
-    ABSTRACT_PREFIX, ACCEPT_CHECK_INTERVAL_S, BYTES_PER_QUEUED_FRAME, SOCKET_BUFFER_BYTES,
-    WANTED_BACKLOG_FRAMES, SeqPacketBus, parse_channel,
+    ABSTRACT_PREFIX,
+    ACCEPT_CHECK_INTERVAL_S,
+    BYTES_PER_QUEUED_FRAME,
+    SOCKET_BUFFER_BYTES,
+    WANTED_BACKLOG_FRAMES,
+    SeqPacketBus,
+    parse_channel,
 )
 
 REPO = Path(__file__).resolve().parents[2]

@@ -8,12 +8,18 @@ import tracemalloc
 
 import pytest
 
-from harness.safety.config import CommsConfig, ForceConfig, SafetyConfig, SensorConfig, StrokeConfig
+from harness.safety import supervisor as supervisor_module
+from harness.safety.config import (
+    CommsConfig,
+    ForceConfig,
+    SafetyConfig,
+    SensorConfig,
+    StrokeConfig,
+)
 from harness.safety.events import CHECK_NAMES, EventRing, bit, index, names_of
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import ArmRefused, ResetRefused, State
 from harness.safety.prearm import PRE_ARM_CHECKS
-from harness.safety import supervisor as supervisor_module
 from harness.safety.supervisor import Supervisor
 
 DT = 0.004

@@ -19,7 +19,7 @@ import pytest
 
 from drivers.protocol_values import DriveState
 from harness import exit_codes
-from harness.record import load_run
+from harness.recording import load_run
 
 pytestmark = pytest.mark.vcan
 

@@ -1,0 +1,172 @@
+"""The profile's ``record:`` section and the one-call entry point that turns it into a motion.
+
+Precedence: keyword arguments (from CLI flags) win over the profile; the records
+directory comes from the flag, then ``$HARNESS_RECORDS_DIR``, then the profile
+(:func:`harness.motions.catalog.records_dir_from`). Relative paths in the profile
+(``records_dir`` and a ``name`` that is a path) are relative to the profile's
+directory, passed as ``base_dir``.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from harness.errors import RecordError
+from harness.input_limits import (
+    MAX_DURATION_S,
+    MAX_PGA_G,
+    MAX_SEED,
+    MAX_TIME_SCALE,
+    MIN_TIME_SCALE,
+)
+from harness.motions.accel_units import normalize_accel_unit
+from harness.motions.catalog import (
+    CATALOG,
+    looks_like_path,
+    records_dir_from,
+    resolve_record,
+    synthetic_seed,
+)
+from harness.motions.loaders import RawRecord, load_record
+from harness.motions.processing import GroundMotion, process_record
+from harness.motions.synthetic import synthetic_record
+from harness.schema import quantity
+
+#: Length of a run when neither the profile nor the CLI gives one (s, processed time).
+DEFAULT_SYNTHETIC_DURATION_S = 30.0
+#: Sample step of the synthetic record before time compression (s).
+SYNTHETIC_DT_S = 0.01
+#: PGA the synthetic record is generated with when none is asked for (g).
+DEFAULT_SYNTHETIC_PGA_G = 0.3
+
+
+@dataclass(frozen=True)
+class RecordConfig:
+    """Profile section ``record:``: which ground motion, and how to scale it."""
+
+    name: str = quantity("synthetic", doc="catalog name, file name or path, or synthetic / synthetic:SEED")
+    records_dir: str | None = quantity(None, doc="directory of the real records (relative to the profile)")
+    # Bounds shared with the command line; harness/input_limits.py gives the reasons.
+    pga_g: float | None = quantity(
+        None, unit="g", gt=0, le=MAX_PGA_G, doc="target peak table acceleration (g); none: the record's"
+    )
+    time_scale: float = quantity(
+        1.0, ge=MIN_TIME_SCALE, le=MAX_TIME_SCALE, doc="time compression factor F: every step is divided by F"
+    )
+    duration_s: float | None = quantity(
+        None, unit="s", gt=0, le=MAX_DURATION_S, doc="run length after compression (s); none: whole record"
+    )
+    accel_unit: str | None = quantity(None, doc="unit of a file that does not state it: g, m/s^2, cm/s^2 (gal)")
+    seed: int = quantity(0, ge=0, le=MAX_SEED, doc="seed of the synthetic record")
+
+    def __post_init__(self) -> None:
+        if not self.name.strip():
+            raise ValueError("name: expected a record name, found an empty string")
+        if self.accel_unit is not None:
+            try:
+                normalize_accel_unit(self.accel_unit)
+            except RecordError as err:
+                raise ValueError(f"accel_unit: {err}") from err
+
+
+def load_raw(
+    name_or_path: str,
+    records_dir: str | Path | None,
+    *,
+    accel_unit: str | None = None,
+    seed: int = 0,
+    synthetic_duration_s: float = DEFAULT_SYNTHETIC_DURATION_S,
+    synthetic_pga_g: float = DEFAULT_SYNTHETIC_PGA_G,
+) -> RawRecord:
+    """Load a record by catalog name, file name or path, or generate ``synthetic[:SEED]``.
+
+    Parameters
+    ----------
+    name_or_path : str
+        See :func:`harness.motions.catalog.resolve_record`; ``synthetic`` uses ``seed``
+        and ``synthetic:SEED`` its own seed.
+    records_dir : str or Path, optional
+        The records directory.
+    accel_unit : str, optional
+        Unit of a file that does not state it.
+    seed : int
+        Seed for plain ``synthetic``.
+    synthetic_duration_s, synthetic_pga_g : float
+        Length (s, before compression) and PGA (g) of a generated record.
+    """
+    named_seed = synthetic_seed(name_or_path)
+    if named_seed is not None:
+        chosen = seed if name_or_path.strip() == "synthetic" else named_seed
+        return synthetic_record(seed=chosen, duration_s=synthetic_duration_s, dt_s=SYNTHETIC_DT_S, pga_g=synthetic_pga_g)
+    path = resolve_record(name_or_path, records_dir)
+    return load_record(path, accel_unit=accel_unit, name=name_or_path if name_or_path in CATALOG else None)
+
+
+def load_motion(
+    config: RecordConfig,
+    *,
+    base_dir: str | Path,
+    records_dir_flag: str | Path | None = None,
+    name: str | None = None,
+    pga_g: float | None = None,
+    time_scale: float | None = None,
+    duration_s: float | None = None,
+    accel_unit: str | None = None,
+    env: Mapping[str, str] = os.environ,
+) -> GroundMotion:
+    """Build the table motion of a run from the profile's ``record:`` section and CLI overrides.
+
+    Parameters
+    ----------
+    config : RecordConfig
+        The profile section.
+    base_dir : str or Path
+        Directory of the profile file (for its relative paths).
+    records_dir_flag : str or Path, optional
+        ``--records-dir`` from the CLI.
+    name, pga_g, time_scale, duration_s, accel_unit : optional
+        CLI overrides; each wins over the profile when given. ``name`` may be a
+        path (relative to the working directory).
+    env : mapping
+        The environment (for ``HARNESS_RECORDS_DIR``).
+
+    Returns
+    -------
+    GroundMotion
+        Compressed, cut, scaled and baseline-corrected.
+    """
+    chosen_name = name if name is not None else resolve_record_name(config.name, base_dir)
+    scale = time_scale if time_scale is not None else config.time_scale
+    duration = duration_s if duration_s is not None else config.duration_s
+    target = pga_g if pga_g is not None else config.pga_g
+    records_dir = records_dir_from(records_dir_flag, config.records_dir, env, base_dir=base_dir)
+    raw = load_raw(
+        chosen_name,
+        records_dir,
+        accel_unit=accel_unit if accel_unit is not None else config.accel_unit,
+        seed=config.seed,
+        synthetic_duration_s=(duration or DEFAULT_SYNTHETIC_DURATION_S) * scale,
+        synthetic_pga_g=target or DEFAULT_SYNTHETIC_PGA_G,
+    )
+    motion = process_record(raw, pga_g=target, time_scale=scale, duration_s=duration)
+    if motion.duration_s > MAX_DURATION_S:
+        raise RecordError(
+            f"record {motion.name!r} runs {motion.duration_s:g} s after a time scale of {scale:g}, expected at most "
+            f"{MAX_DURATION_S:g} s (what a run or a simulation may allocate); cut it with --duration or record.duration_s"
+        )
+    return motion
+
+
+def resolve_record_name(name: str, base_dir: str | Path) -> str:
+    """A record name, with a relative path in it taken relative to ``base_dir``.
+
+    ``base_dir`` is the profile's directory for the profile's own ``record.name``, and the
+    working directory for ``--record``.
+    """
+    path = Path(name).expanduser()
+    if synthetic_seed(name) is None and looks_like_path(name) and not path.is_absolute():
+        return str(Path(base_dir) / path)
+    return name

@@ -1,0 +1,275 @@
+"""``harness dry-run``: the whole test against the virtual rig, over CAN, with the real loop.
+
+By default the rig runs as a separate ``harness rig`` process, as on a real channel
+(``socketcan``/``vcan0``): the loop's process then holds nothing but the loop, so no other
+thread takes the interpreter lock from it. The default bus is the ``seqpacket`` interface
+(drivers/seqpacket.py), a Unix-socket bus private to this dry run that needs no set-up.
+The command starts the rig unless ``--external-rig`` says one is already running. On
+python-can's in-process ``virtual`` bus (``--interface virtual``) the rig runs in a thread
+of this process instead (fine in lockstep; in real time it competes with the loop). Afterwards the
+dry run's peaks are printed beside the simulated passive reference, and compared with
+``harness simulate --rig-effects``: the same rig models (sensors, actuator, safety)
+simulated offline.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from drivers.protocol_values import RigCommand
+from harness.control.factory import make_controller
+from harness.errors import BusError
+from harness.loop.table_link import CanTableLink
+from harness.model.plant import Plant, TableMotion
+from harness.model.warmup import warm_up
+from harness.peaks import Peaks, run_peaks
+from harness.profile import Profile
+from harness.recording import load_run
+from harness.runs.session import SessionResult, SessionSettings, run_session
+from harness.runs.simulate import (
+    StudyOptions,
+    motion_facts,
+    prepare_motion,
+    resolve_profile,
+)
+from harness.simulation.case import CaseResult, SamplingSettings, run_case
+from harness.simulation.twin import run_rig_twin
+
+#: The python-can interface (drivers/seqpacket.py) of the default dry run: the rig runs in its own
+#: process, on a Unix-socket bus that needs no set-up.
+PRIVATE_BUS_INTERFACE = "seqpacket"
+RIG_APPEAR_TIMEOUT_S = 60.0
+IN_PROCESS_SWITCH_INTERVAL_S = 2e-4
+LOG_DIR = Path(__file__).resolve().parent.parent / "logs"
+
+
+@dataclass(frozen=True)
+class DryRunOptions:
+    """The command line's choices for a dry run."""
+
+    study: StudyOptions = StudyOptions()
+    interface: str | None = None
+    channel: str | None = None
+    log_dir: str | None = None
+    lockstep: bool = False
+    external_rig: bool = False
+    show_console: bool = True
+    compare: bool = True
+
+
+@dataclass
+class DryRunResult:
+    """The session and the simulated twins it is compared with."""
+
+    session: SessionResult
+    profile: Profile  # resolved: every option folded in
+    peaks: Peaks
+    passive: CaseResult | None
+    twin: CaseResult | None
+    motion: object
+    span_s: float | None = None  # record time covered by a run that ended early (s); None: the whole record
+
+    def largest_twin_difference(self) -> tuple[str, float]:
+        """The peak that differs most from the simulated twin's, and by how much (% of the twin's)."""
+        ours, twin = self.peaks.flatten(), self.twin.peaks.flatten()
+        worst = max(twin, key=lambda k: abs(ours[k] - twin[k]) / abs(twin[k]) if twin[k] else 0.0)
+        difference = abs(ours[worst] - twin[worst]) / abs(twin[worst]) * 100 if twin[worst] else 0.0
+        return worst, difference
+
+
+def _rig_process(profile: Profile, can, lockstep: bool) -> subprocess.Popen:
+    """Start the virtual rig in its own process, serving the resolved ``profile`` on ``can``.
+
+    The rig gets the profile this dry run resolved (``--set``, ``--variant`` and every
+    option folded in) as a JSON document on its standard input: it parses no options
+    of its own, so it cannot run a different profile from the loop's.
+    """
+    job = {"profile": profile.resolved_data(), "interface": can.interface, "channel": can.channel,
+           "lockstep": lockstep, "parent_pid": os.getpid()}
+    # Its own session: the terminal's Ctrl-C goes to the loop, which stops safely, not to the rig.
+    process = subprocess.Popen([sys.executable, "-m", "harness.runs.rig_process"], stdin=subprocess.PIPE,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    assert process.stdin is not None
+    process.stdin.write(json.dumps(job).encode())
+    process.stdin.close()
+    return process
+
+
+class RigCoordinator:
+    """The harness side's dealings with the virtual rig: wait for it, lockstep; its :attr:`table` starts and stops the table.
+
+    Parameters
+    ----------
+    lockstep : bool
+    period_s : float
+        The loop's tick period (s): tick k happens at loop time k * period_s.
+    process : subprocess.Popen, optional
+        The rig process this command started (to report why it died).
+    appear_timeout_s : float
+    """
+
+    def __init__(
+        self, lockstep: bool, period_s: float, process: subprocess.Popen | None = None,
+        appear_timeout_s: float = RIG_APPEAR_TIMEOUT_S,
+    ):
+        self.lockstep = lockstep
+        self.period_s = period_s
+        self.process = process
+        self.appear_timeout_s = appear_timeout_s
+        self.link = None
+        self.base_step = 0
+        #: The virtual table's start and stop: the same RIG_CONTROL frames `harness run` sends a real one.
+        self.table = CanTableLink(lockstep)
+
+    def _poll_until(self, done, timeout_s: float, what: str) -> None:
+        deadline = time.monotonic() + timeout_s
+        while not done():
+            process = self.process
+            if process is not None and process.poll() is not None:
+                detail = process.stderr.read().decode(errors="replace").strip()[-2000:] if process.stderr else ""
+                raise BusError(f"the virtual rig process exited with status {process.returncode}: {detail}")
+            if time.monotonic() > deadline:
+                raise BusError(
+                    f"{what} within {timeout_s:g} s on {self.link.bus.channel_info}; start a rig with "
+                    "`harness rig PROFILE --interface ... --channel ...` (or drop --external-rig)"
+                )
+            self.link.reader.poll(0.0, block_s=0.05)
+
+    def on_link(self, link) -> None:
+        """Wait for the rig's status frames; switch it to lockstep and note its step count."""
+        self.link = link
+        self.table.attach(link)
+        status = link.reader.sample("RIG_STATUS")
+        self._poll_until(lambda: status.count > 0, self.appear_timeout_s, "no RIG_STATUS frame from a virtual rig")
+        if self.lockstep:
+            seen = status.count
+            link.writer.rig_control(RigCommand.NONE, True, 0.0)
+            self._poll_until(lambda: status.count > seen, 5.0, "the rig did not answer the switch to lockstep")
+            self.base_step = int(status.values[status.index("step_index")])
+
+
+    def lockstep_wait(self, tick):
+        """The loop's lockstep wait: poll until the rig reports step ``base + k``."""
+        reader = tick.reader
+        status = reader.sample("RIG_STATUS")
+        step_index = status.index("step_index")
+        period = self.period_s
+
+        def wait(k: int, timeout_s: float) -> bool:
+            now = k * period
+            reader.poll(now)
+            deadline = time.monotonic() + timeout_s
+            while status.values[step_index] < self.base_step + k:
+                if time.monotonic() > deadline:
+                    return False
+                reader.poll(now, keep_fresh=True, block_s=0.005)
+            return True
+
+        return wait
+
+
+def simulated_twins(
+    profile: Profile, motion, rate_hz: float, controller: str, lockstep: bool, span_s: float | None = None,
+) -> tuple[CaseResult, CaseResult]:
+    """The passive reference and the controlled rig twin of a dry run, simulated offline.
+
+    The twin runs the rig's own sensor, actuator and safety models; a real-time dry run
+    adds on average one period of delay (frames sampled up to a period old, commands
+    applied up to a period late); in lockstep there is none, and sensor delays are
+    rounded to whole steps as the rig does. ``span_s`` limits both to the record time a
+    run that ended early covered (s), so peaks are compared over the same span.
+    """
+    duration_s = motion.duration_s if span_s is None else max(min(span_s, motion.duration_s), 1.0 / rate_hz)
+    table = TableMotion.from_motion(motion)
+    plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
+    passive = run_case("passive", plant, duration_s, SamplingSettings(rate_hz))
+    delay = 0.0 if lockstep else 1.0 / rate_hz
+    twin = run_rig_twin(profile, motion, rate_hz, make_controller(profile, controller), asynchronous_delay_s=delay,
+                        lockstep=lockstep, duration_s=duration_s)
+    return passive, twin
+
+
+def record_span_s(session: SessionResult, motion) -> float | None:
+    """Record time a run that ended early covered (s); None when it ran the whole record."""
+    if session.outcome == "completed":
+        return None
+    start = session.loop.record_start_t_s
+    if start is None:
+        return 0.0
+    data = load_run(session.run_path)
+    span = float(data["t_s"][-1]) - start
+    return span if span < motion.duration_s else None
+
+
+def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timing=None) -> DryRunResult:
+    """Run a dry run; see the module docstring."""
+    from harness.can_link import open_rig
+    from harness.rig.virtual_rig import VirtualRig
+
+    warm_up()  # compile the kernels now, never inside the loop or the rig
+    profile = resolve_profile(profile, options.study)
+    motion = prepare_motion(profile)
+    rate_hz = profile.control.rate_hz
+    can = profile.can_settings(options.interface, options.channel)
+    if can.interface == PRIVATE_BUS_INTERFACE and not options.external_rig:
+        # a private bus per dry run: two dry runs at once (or a test suite) never meet
+        can = dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}")
+    controller = profile.control.controller
+    settings = SessionSettings(
+        kind="dry-run", can=can, rate_hz=rate_hz, duration_s=motion.duration_s, controller=controller,
+        log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
+        show_console=options.show_console,
+        metadata={"record": motion_facts(motion)},
+    )
+    rig = rig_link = process = None
+    switch_interval = sys.getswitchinterval()
+    try:
+        if can.interface == "virtual":
+            # The rig shares this process: hand the interpreter lock over every 0.2 ms instead
+            # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
+            sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
+            rig_link = open_rig(can)
+            rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=options.lockstep, can_config=can)
+            rig.start_thread()
+        elif not options.external_rig:
+            process = _rig_process(profile, can, options.lockstep)
+        coordinator = RigCoordinator(options.lockstep, 1.0 / rate_hz, process)
+        session = run_session(
+            profile, settings, on_start=coordinator.table.start,
+            make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
+            on_link=coordinator.on_link, on_host_timing=on_host_timing, console=console,
+            stop_table=coordinator.table.stop,
+        )
+    finally:
+        sys.setswitchinterval(switch_interval)
+        if rig is not None:
+            rig.stop()
+        if rig_link is not None:
+            rig_link.close()
+        if process is not None:
+            _stop_process(process)
+    peaks = run_peaks(load_run(session.run_path))  # weight: the metadata's, the resolved profile's
+    passive = twin = None
+    span = record_span_s(session, motion)
+    if options.compare:
+        passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep, span)
+    return DryRunResult(session, profile, peaks, passive, twin, motion, span)
+
+
+def _stop_process(process: subprocess.Popen) -> None:
+    import signal
+
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()

@@ -1,0 +1,145 @@
+"""``harness rig PROFILE``: serve the virtual rig on a CAN bus in the foreground.
+
+The CLI parses the arguments and calls :func:`run_rig_command`; this module does
+the rest: load the profile and record, open the bus (checked by
+:func:`harness.can_link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
+event, then stop cleanly: drive disabled and announced, bus shut down.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from harness import exit_codes
+from harness.can_config import CanConfig
+from harness.can_link import open_rig
+from harness.errors import EXPECTED_ERRORS, BusError
+from harness.model.warmup import warm_up
+from harness.profile import Profile, load_profile
+from harness.rig.virtual_rig import VirtualRig
+from harness.runs.simulate import StudyOptions, prepare_motion, resolve_profile
+
+
+def run_rig_command(
+    profile_path: str | Path | None,
+    *,
+    interface: str | None = None,
+    channel: str | None = None,
+    lockstep: bool = False,
+    options: StudyOptions | None = None,
+    seed: int | None = None,
+    variant: str | None = None,
+    overrides: Sequence[str] = (),
+    stop_event: threading.Event | None = None,
+    clock: Callable[[], float] = time.monotonic,
+    on_ready: Callable[[VirtualRig], None] | None = None,
+    parent_pid: int | None = None,
+) -> int:
+    """Serve the virtual rig until Ctrl-C or ``stop_event``; return an exit status.
+
+    Parameters
+    ----------
+    profile_path : str or Path or None
+        Profile YAML (None: the default profile).
+    interface, channel : str, optional
+        Override the profile's ``can.interface`` / ``can.channel`` (``--interface``, ``--channel``).
+    lockstep : bool
+        ``--lockstep``: start in lockstep and stay there (otherwise the harness may
+        switch it on with RIG_CONTROL lockstep=1).
+    options : StudyOptions, optional
+        Record overrides (``--record``, ``--records-dir``, ``--pga``, ``--time-scale``,
+        ``--duration``); ``rate_hz`` (``--rate``) sets the step period (default: the
+        profile's ``loop.rate_hz``, the harness's tick rate).
+    seed : int, optional
+        ``--seed``: noise seed (default ``rig.seed``).
+    variant : str, optional
+        ``--variant`` of the profile.
+    overrides : sequence of str
+        ``--set KEY.PATH=VALUE`` profile overrides.
+    stop_event : threading.Event, optional
+        Set it to stop (tests, an embedding process); Ctrl-C stops too.
+    clock : callable
+        Wall clock (s).
+    on_ready : callable, optional
+        Called with the running rig once it serves (for a console's status line).
+    parent_pid : int, optional
+        Stop (drive disabled and announced) once this process is gone: a dry run that
+        started the rig and died must not leave it serving.
+
+    Returns
+    -------
+    int
+        :data:`harness.exit_codes.OK` after a stop by ``stop_event``,
+        :data:`~harness.exit_codes.STOPPED` after Ctrl-C. Configuration errors
+        (profile, record, bus) raise one of :data:`~harness.errors.EXPECTED_ERRORS`
+        before anything is sent; the CLI maps them to ``INPUT_ERROR``.
+
+    Raises
+    ------
+    BusError
+        The rig stopped serving on its own (the bus failed), after the clean stop.
+    """
+    options = options or StudyOptions()
+    profile = resolve_profile(load_profile(profile_path, variant, overrides), options)
+    return serve_rig(profile, profile.can_settings(interface, channel), lockstep=lockstep, seed=seed,
+                     stop_event=stop_event, clock=clock, on_ready=on_ready, parent_pid=parent_pid)
+
+
+def serve_rig(
+    profile: Profile,
+    can_config: CanConfig,
+    *,
+    lockstep: bool = False,
+    seed: int | None = None,
+    stop_event: threading.Event | None = None,
+    clock: Callable[[], float] = time.monotonic,
+    on_ready: Callable[[VirtualRig], None] | None = None,
+    parent_pid: int | None = None,
+) -> int:
+    """Serve the virtual rig of a resolved ``profile`` on ``can_config`` until stopped.
+
+    The rig steps at the profile's ``control.rate_hz`` (the harness's tick rate) and plays
+    its ``record`` section. Parameters and return value as :func:`run_rig_command`.
+    """
+    warm_up()  # compile the plant's kernel before serving the bus in real time
+    motion = prepare_motion(profile)
+    period = 1.0 / profile.control.rate_hz
+    stop = stop_event or threading.Event()
+    with open_rig(can_config) as link:
+        rig = VirtualRig(
+            profile, motion, link, step_period_s=period, lockstep=lockstep or None, seed=seed, clock=clock,
+            can_config=can_config,
+        )
+        status = exit_codes.OK
+        rig.start_thread()
+        try:
+            if on_ready is not None:
+                on_ready(rig)
+            while not stop.wait(0.1) and rig.serving and _alive(parent_pid):
+                pass
+        except KeyboardInterrupt:
+            status = exit_codes.STOPPED
+        finally:
+            rig.stop()
+    if isinstance(rig.error, (*EXPECTED_ERRORS, OSError)):
+        raise BusError(f"the virtual rig stopped serving: {rig.error}") from rig.error
+    if rig.error is not None:
+        raise rig.error
+    return status
+
+
+def _alive(pid: int | None) -> bool:
+    """True while process ``pid`` exists (always True for None)."""
+    if pid is None or os.getppid() == pid:
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True

@@ -1,0 +1,243 @@
+"""One control session on a bus: what ``harness dry-run`` and ``harness run`` share.
+
+Opens the harness side of the CAN link (the bus load and protocol version are checked
+before anything is opened), builds the controller, the friction estimator and the
+safety supervisor from the profile, creates the run folder and taps the raw CAN traffic
+into it, runs the loop under the live console, and closes everything whatever happens:
+the last frame the harness sends is always zero force with the drive disabled.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from harness import exit_codes
+from harness.can_config import CanConfig
+from harness.can_link import open_harness
+from harness.console import LiveConsole
+from harness.control.estimator import FrictionEstimator
+from harness.control.factory import build_controller_for_rig
+from harness.errors import ProfileError
+from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
+from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult, LoopStatus
+from harness.loop.table_link import CanTableLink
+from harness.loop.tick import ControlTick
+from harness.model.warmup import warm_up
+from harness.profile import Profile
+from harness.recording import RunFolder
+from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
+from harness.safety.config import TRIP_CLASSES
+from harness.safety.supervisor import Supervisor
+from harness.safety.weakening import summary
+
+OUTCOME_EXIT = {"completed": exit_codes.OK, "tripped": exit_codes.TRIPPED, "stopped": exit_codes.STOPPED}
+
+
+@dataclass
+class SessionSettings:
+    """How one session runs (the command line's choices, resolved)."""
+
+    kind: str
+    can: CanConfig
+    rate_hz: float
+    duration_s: float
+    controller: str
+    log_dir: Path
+    lockstep: bool = False
+    show_console: bool = True
+    metadata: dict = field(default_factory=dict)
+
+
+@dataclass
+class SessionResult:
+    """What a session produced."""
+
+    outcome: str
+    trip_reason: str
+    run_path: Path
+    loop: LoopResult
+    bus: dict = field(default_factory=dict)
+    #: What the recorder lost and why ("" when the run folder holds the whole record).
+    record_problem: str = ""
+
+    @property
+    def record_complete(self) -> bool:
+        """True if every row, frame and event reached the run folder."""
+        return not self.record_problem
+
+    @property
+    def exit_code(self) -> int:
+        """The command's exit status for this outcome.
+
+        A run that completed but lost its record exits 3 like a trip: the table moved, the
+        rig is safe, and the test must be repeated to get its data (docs/SAFETY.md, "recorder").
+        """
+        if self.outcome == "completed" and not self.record_complete:
+            return exit_codes.TRIPPED
+        return OUTCOME_EXIT.get(self.outcome, exit_codes.INTERNAL_ERROR)
+
+
+def bus_statistics(link) -> dict:
+    """Frames received, rejected by kind, sent, and the bus's error counters (for metadata and benchmarks)."""
+    from drivers.decoder import RxStatus
+
+    reader, health = link.reader, link.reader.health
+    counts = reader.decoder.counts
+    return {
+        "frames_received": reader.counters.frames,
+        "rejected": {status.name.lower(): counts[status] for status in RxStatus if status is not RxStatus.OK and counts[status]},
+        "frames_lost": counts[RxStatus.SKIPPED_COUNTER],
+        "polls_capped": reader.counters.polls_capped,
+        "foreign_commands": reader.counters.foreign_commands,
+        "error_frames": health.error_frames,
+        "send_failures": health.send_failures,
+    }
+
+
+def _metadata(profile: Profile, settings: SessionSettings) -> dict:
+    stroke, force = profile.safety.stroke, profile.safety.force
+    return {
+        "controller": settings.controller,
+        "rate_hz": settings.rate_hz,
+        "lockstep": settings.lockstep,
+        "can": {"interface": settings.can.interface, "channel": settings.can.channel, "bitrate_bps": settings.can.bitrate_bps},
+        "total_weight_N": profile.structure.total_weight_N,
+        "stroke_soft_limit_m": stroke.soft_limit_m,
+        "stroke_hard_limit_m": stroke.hard_limit_m,
+        "force_limit_N": force.max_force_N,
+        "estop_panel_required": profile.safety.estop.panel_required,
+        "trip_actions": {group: list(getattr(profile.safety.trip_actions, group)) for group in TRIP_CLASSES},
+        "safety_weakened": [item.as_dict() for item in profile.safety_weakened],
+        **settings.metadata,
+    }
+
+
+NO_PANEL_WARNING = (
+    "safety.estop.panel_required is false: this run does not require a live E-stop panel; an unplugged panel "
+    "cannot be told from one that is not pressed"
+)
+
+
+def _note_no_panel(folder, console) -> None:
+    """Record and show the weakening of running without a required E-stop panel."""
+    folder.record_event(None, "safety", "estop_panel_not_required", NO_PANEL_WARNING)
+    if console is not None:
+        console.print(f"[bold yellow]warning:[/] {NO_PANEL_WARNING}")
+
+
+def _check_host_timing(profile: Profile, settings: SessionSettings, link, folder, report) -> HostTiming:
+    """The pre-flight timing check (harness.loop.preflight); refuses the run, nothing moved, if it fails."""
+    timing = measure_host_timing(
+        settings.rate_hz, profile.safety.run.max_stall_s, profile.loop.spin_s,
+        poll=lambda: link.reader.poll(0.0),  # drain what the rig sends; ages are judged from the loop's first tick
+    )
+    folder.record_event(None, "timing", "host_timing", timing.summary())
+    if report is not None:
+        report(timing)
+    try:
+        timing.check()
+    except HostTimingRefused as err:
+        folder.finish("refused", trip_reason=str(err))
+        raise
+    return timing
+
+
+def run_session(
+    profile: Profile,
+    settings: SessionSettings,
+    *,
+    on_start: Callable[[float], None] | None = None,
+    make_lockstep: Callable[[ControlTick], Callable[[int, float], bool]] | None = None,
+    on_link: Callable[[object], None] | None = None,
+    on_host_timing: Callable[[HostTiming], None] | None = None,
+    console=None,
+    stop_table: Callable[[float], object] | None = None,
+    table_link: CanTableLink | None = None,
+) -> SessionResult:
+    """Run one session and return its outcome; the run folder is finished in every case.
+
+    Parameters
+    ----------
+    profile : Profile
+    settings : SessionSettings
+    on_start : callable, optional
+        Called with the loop time when RUNNING begins.
+    make_lockstep : callable, optional
+        Given the tick, returns the lockstep wait function (``settings.lockstep`` must be True).
+    on_link : callable, optional
+        Called with the open harness link before the loop starts (e.g. to switch a virtual rig to lockstep).
+    on_host_timing : callable, optional
+        Called with the pre-flight timing check's result (real time only), before arming.
+    console : rich Console, optional
+    stop_table : callable, optional
+        ``stop_table(now)``: send the table controller's stop (the ``stop_table`` trip action);
+        None when the run has no table link.
+    table_link : CanTableLink, optional
+        The table controller on the bus (``table.link: can`` for ``harness run``): started at
+        RUNNING, stopped at the end and on a trip (``stop_table`` trip action), record time
+        counted from its RIG_STATUS ``table_running``. Overrides ``on_start`` and ``stop_table``.
+
+    Raises
+    ------
+    HostTimingRefused
+        In real time, when the host cannot hold the stall budget (nothing was moved).
+    """
+    if profile.structure.n_stories != PROTOCOL_STORIES:
+        raise ProfileError(f"the CAN protocol carries {PROTOCOL_STORIES} stories; this profile has {profile.structure.n_stories}",
+                           profile.source_path, "structure")
+    warm_up()  # the estimator's kernel must not compile inside the first tick
+    controller = build_controller_for_rig(profile, settings.controller)
+    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    supervisor = Supervisor(profile.safety, period_s=1.0 / settings.rate_hz)
+    if table_link is not None:
+        on_start, stop_table = table_link.start, table_link.stop
+    link = open_harness(settings.can)
+    folder = None
+    try:
+        folder = RunFolder.create(
+            settings.log_dir, profile.name, settings.kind, profile.resolved_data(), CONTROL_ROW,
+            metadata=_metadata(profile, settings),
+        ).start()
+        heartbeat_every = max(1, round(settings.rate_hz / settings.can.heartbeat_rate_hz))
+        estop_every = max(1, round(settings.rate_hz / settings.can.estop_rate_hz))
+        tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every, estop_every, stop_table)
+        if not profile.safety.estop.panel_required:
+            _note_no_panel(folder, console)
+        link.reader.tap, link.writer.tap = folder.frame_taps()
+        if table_link is not None:
+            table_link.attach(link)
+        if on_link is not None:
+            on_link(link)
+        host_timing = None if settings.lockstep else _check_host_timing(profile, settings, link, folder, on_host_timing)
+        lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None
+        status = LoopStatus()
+        loop = ControlLoop(tick, profile.loop, settings.rate_hz, settings.duration_s, lockstep, on_start, status,
+                           table_running=table_link.running if table_link is not None else None)
+        title = f"{profile.name}: {settings.kind}, {settings.controller} at {settings.rate_hz:g} Hz" + (" (lockstep)" if lockstep else "")
+        alerts = (summary(profile.safety_weakened),) if profile.safety_weakened else ()
+        with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,
+                         profile.safety.force.max_force_N, title, loop.timing, console, settings.show_console, alerts):
+            try:
+                result = loop.run()
+            except ArmTimeout as err:
+                folder.record_event(None, "fault", "arm_refused", str(err))
+                folder.finish("error", trip_reason=f"arm refused: {err.failed}")
+                raise
+        if table_link is not None and result.outcome != "tripped":
+            table_link.stop(loop.scheduler.elapsed_s)  # the end of the run (a trip's stop is its trip action)
+        bus = bus_statistics(link)
+        folder.finish(result.outcome, trip_reason=result.trip_reason or None,
+                      summary={"timing": result.timing, "realtime": result.realtime_report, "bus": bus,
+                               "record_start_t_s": result.record_start_t_s,
+                               "host_timing": host_timing.as_dict() if host_timing else None})
+        return SessionResult(result.outcome, result.trip_reason, folder.path, result, bus, folder.record_problem())
+    except BaseException:
+        if folder is not None:
+            folder.finish("error")  # idempotent: keeps an outcome already written
+        raise
+    finally:
+        link.writer.tap = None
+        link.reader.tap = None
+        link.close()

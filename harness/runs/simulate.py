@@ -1,0 +1,209 @@
+"""``harness simulate``: passive and controlled cases of one profile and record, side by side.
+
+Everything a command needs between the profile and the simulator: the table motion
+with the command-line overrides applied, the controller with its design model, the
+sampling settings, and the results in the JSON layout of the issue tracker (SI).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from harness.control.estimator import FrictionEstimator
+from harness.control.factory import (
+    build_controller_for_rig,
+    make_controller,
+    require_design,
+)
+from harness.errors import ProfileError
+from harness.model.plant import Plant, TableMotion
+from harness.motions import check_table_limits, load_motion
+from harness.profile import Profile
+from harness.simulation.case import CaseResult, SamplingSettings, run_case
+
+NO_CONTROLLER = "none"
+
+
+@dataclass(frozen=True)
+class StudyOptions:
+    """Command-line overrides of a profile; ``None`` keeps the profile's value."""
+
+    record: str | None = None
+    records_dir: str | None = None
+    pga_g: float | None = None
+    time_scale: float | None = None
+    duration_s: float | None = None
+    controller: str | None = None
+    rate_hz: float | None = None
+    friction: str | None = None
+    transport_delay_s: float | None = None
+    design_stiffness_scale: float | None = None
+    rig_effects: bool = False
+
+
+@dataclass
+class StudyResult:
+    """Both cases of a study and what they were run with."""
+
+    profile: Profile
+    motion: object
+    controller_name: str
+    settings: SamplingSettings
+    design_stiffness_scale: float
+    rig_effects: bool = False
+    cases: dict[str, CaseResult] = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        """The JSON document of ``harness simulate --json`` (SI units)."""
+        motion = self.motion
+        controlled = self.cases.get("controlled", self.cases["passive"])
+        return {
+            "profile": self.profile.name,
+            "record": motion_facts(motion),
+            "controller": self.controller_name,
+            "sampling": {
+                "rate_hz": self.settings.rate_hz,
+                "transport_delay_s": self.settings.transport_delay_s,
+                "friction_source": self.settings.friction_source,
+                "design_stiffness_scale": self.design_stiffness_scale,
+                "rig_effects": self.rig_effects,
+            },
+            "total_weight_N": self.profile.structure.total_weight_N,
+            "cases": {"passive": self.cases["passive"].peaks.as_json(), "controlled": controlled.peaks.as_json()},
+        }
+
+    def write_json(self, path: str | Path) -> None:
+        """Write :meth:`to_json` to ``path``."""
+        Path(path).write_text(json.dumps(self.to_json(), indent=2) + "\n")
+
+
+def motion_facts(motion) -> dict:
+    """Name, PGA (g), PGV (m/s), PGD (m), time scale and duration (s) of a processed motion."""
+    return {
+        "name": motion.name,
+        "pga_g": motion.pga_g,
+        "pgv_m_s": motion.pgv_m_s,
+        "pgd_m": motion.pgd_m,
+        "time_scale": motion.time_scale,
+        "duration_s": motion.duration_s,
+    }
+
+
+def resolve_profile(profile: Profile, options: StudyOptions) -> Profile:
+    """The profile with the command line's options folded in: the one place they are resolved.
+
+    Every option that has a profile key becomes that key's value, so everything downstream
+    (the simulator, the loop, the virtual rig in its own process) reads one frozen profile
+    and nothing looks at the options again:
+
+    - ``record``, ``records_dir`` (resolved with ``$HARNESS_RECORDS_DIR`` and made absolute,
+      like a record given as a relative path), ``pga_g``, ``time_scale``, ``duration_s``
+      go to the ``record`` section;
+    - ``controller`` (unless ``none``), ``friction``, ``transport_delay_s`` and
+      ``design_stiffness_scale`` to ``control``;
+    - ``rate_hz`` to ``control.rate_hz``, ``loop.rate_hz`` and the CAN command and sensor
+      rates, which must agree (the profile checks it).
+
+    Parameters
+    ----------
+    profile : Profile
+    options : StudyOptions
+
+    Returns
+    -------
+    Profile
+        Validated like a loaded profile (its ``__post_init__`` checks run again).
+    """
+    from harness.motions import records_dir_from
+    from harness.motions.config import resolve_record_name
+
+    record = profile.record
+    name = options.record if options.record is not None else record.name
+    name = resolve_record_name(name, Path.cwd() if options.record is not None else profile.base_dir)
+    records_dir = records_dir_from(options.records_dir, record.records_dir, base_dir=profile.base_dir)
+    record = dataclasses.replace(
+        record, name=name, records_dir=None if records_dir is None else str(Path(records_dir).resolve()),
+        **_given(pga_g=options.pga_g, time_scale=options.time_scale, duration_s=options.duration_s),
+    )
+    if options.controller not in (None, NO_CONTROLLER):
+        require_design(profile, options.controller)
+    control = dataclasses.replace(profile.control, **_given(
+        controller=None if options.controller == NO_CONTROLLER else options.controller,
+        rate_hz=options.rate_hz, friction=options.friction, transport_delay_s=options.transport_delay_s,
+        design_stiffness_scale=options.design_stiffness_scale,
+    ))
+    changes: dict = {"record": record, "control": control}
+    if options.rate_hz is not None:
+        changes["loop"] = dataclasses.replace(profile.loop, rate_hz=options.rate_hz)
+        changes["can"] = profile.can_settings(rate_hz=options.rate_hz)
+    try:
+        return dataclasses.replace(profile, **changes)
+    except ValueError as err:  # a combination the profile refuses, as it would from the file
+        raise ProfileError(f"{err} (with the command line's options)", profile.source_path) from err
+
+
+def _given(**values) -> dict:
+    """The items whose value is not None."""
+    return {key: value for key, value in values.items() if value is not None}
+
+
+def prepare_motion(profile: Profile, options: StudyOptions | None = None):
+    """The processed table motion of ``profile`` (with ``options`` folded in), checked against the table."""
+    if options is not None:
+        profile = resolve_profile(profile, options)
+    record = profile.record
+    motion = load_motion(record, base_dir=profile.base_dir, records_dir_flag=record.records_dir)
+    if profile.table is not None:
+        check_table_limits(motion, profile.table)
+    return motion
+
+
+def sampling_settings(profile: Profile) -> SamplingSettings:
+    """Controller sampling of a resolved profile."""
+    control = profile.control
+    return SamplingSettings(rate_hz=control.rate_hz, transport_delay_s=control.transport_delay_s,
+                            friction_source=control.friction)
+
+
+def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, float], None] | None = None) -> StudyResult:
+    """Simulate the passive case and (unless the controller is 'none') the controlled case.
+
+    Parameters
+    ----------
+    profile : Profile
+    options : StudyOptions
+    progress : callable, optional
+        ``progress(case_name, fraction)``.
+    """
+    profile = resolve_profile(profile, options)
+    motion = prepare_motion(profile)
+    settings = sampling_settings(profile)
+    scale = profile.control.design_stiffness_scale
+    name = NO_CONTROLLER if options.controller == NO_CONTROLLER else profile.control.controller
+    controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
+    table = TableMotion.from_motion(motion)
+    plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
+    result = StudyResult(profile, motion, name, settings, scale, options.rig_effects)
+    duration = motion.duration_s
+
+    def reporter(case: str):
+        return None if progress is None else (lambda fraction: progress(case, fraction))
+
+    result.cases["passive"] = run_case("passive", plant, duration, settings, progress=reporter("passive"))
+    if controller is not None and options.rig_effects:
+        from harness.simulation.twin import run_rig_twin
+
+        rig_controller = build_controller_for_rig(profile, name, scale)  # the same design as the ideal case
+        result.cases["controlled"] = run_rig_twin(
+            profile, motion, settings.rate_hz, rig_controller, asynchronous_delay_s=settings.transport_delay_s
+        )
+    elif controller is not None:
+        estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+        result.cases["controlled"] = run_case(
+            "controlled", plant, duration, settings, controller, estimator, progress=reporter("controlled")
+        )
+    return result
