@@ -19,11 +19,11 @@ from harness.errors import SafetyError
 from harness.loop.config import LoopConfig
 from harness.loop.operator import OperatorSignals
 from harness.loop.realtime import apply_realtime, restore_realtime
-from harness.loop.scheduler import FixedRateScheduler
 from harness.loop.status import LoopStatus  # re-exported: it lived here before
 from harness.loop.tick import ControlTick
 from harness.loop.timing import TimingStats
 from harness.safety.lifecycle import State
+from harness.scheduler import FixedRateScheduler
 
 _FINAL = (State.DONE, State.TRIPPED)
 #: Longest wait for the table controller's RIG_STATUS ``table_running`` after RIG_CONTROL start (s).

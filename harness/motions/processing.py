@@ -44,8 +44,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from harness.errors import RecordError
-from harness.motions import baseline
 from harness.motions.accel_units import G_M_S2
+from harness.motions.baseline import bump_count, fit_rest, highpass, taper_window
 from harness.motions.checks import MIN_SAMPLES
 from harness.motions.integration import interpolate, interpolate_scalar
 from harness.motions.loaders import RawRecord, SampledAcceleration
@@ -255,15 +255,15 @@ def _baseline(
     """Taper, optional high-pass, integrate and fit to rest; return the triple and the ramp (s)."""
     highpass_hz, order, taper_fraction, corner_hz = options
     ramp = min(int(round(taper_fraction * (n_content - 1))), (n_content - 1) // 2)
-    window = baseline.taper_window(n_content, accel.size, ramp)
+    window = taper_window(n_content, accel.size, ramp)
     accel = accel * window
     if ramp == 0 and accel[0] != 0.0:
         notes.append(f"no taper: the acceleration starts at {accel[0]:.4g} m/s^2, a step for the table")
     if highpass_hz is not None:
-        accel = baseline.highpass(accel, dt, highpass_hz, order) * window
+        accel = highpass(accel, dt, highpass_hz, order) * window
         notes.append(f"zero-phase Butterworth high-pass, order {order} (forward-backward), corner {highpass_hz:g} Hz")
-    accel, velocity, displacement, (end_x, end_v) = baseline.fit_rest(accel, dt, corner_hz)
-    count = baseline.bump_count((accel.size - 1) * dt, corner_hz)
+    accel, velocity, displacement, (end_x, end_v) = fit_rest(accel, dt, corner_hz)
+    count = bump_count((accel.size - 1) * dt, corner_hz)
     notes.append(
         f"baseline: {count} half-sine corrections up to {corner_hz:g} Hz removed end offsets of "
         f"{end_x * 1e3:.3g} mm and {end_v * 1e3:.3g} mm/s"

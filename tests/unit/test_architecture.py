@@ -2,6 +2,12 @@
 
 - ``drivers/`` imports nothing from ``harness/``: the drivers know CAN and units, not the
   profile, the controller or the supervisor (DESIGN.md, "one direction").
+- No two modules import each other, even inside a function: the import graph has no cycle.
+- Imports run one way, from the top down: the command line and the commands, then the
+  runs, then the loop and the simulation, then the rig, control and safety, then the model,
+  the motions, the run folders and CAN, then configuration and errors. The test checks
+  the layers that have a rule of their own: nothing below imports a command or a run, and
+  nothing below the loop and the simulation imports them.
 
 :func:`project_imports` is the reusable part: per module, the project modules it imports,
 imports inside functions and classes included (an import hidden in a function is still a
@@ -136,6 +142,86 @@ def test_drivers_import_nothing_from_harness() -> None:
     }
     offenders = {module: deps for module, deps in offenders.items() if deps}
     assert not offenders, f"drivers must not import harness; found: {offenders}"
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    cycles: list[list[str]] = []
+
+    def visit(module: str) -> None:
+        index[module] = low[module] = len(index)
+        stack.append(module)
+        on_stack.add(module)
+        for dep in graph.get(module, ()):
+            if dep not in graph:
+                continue
+            if dep not in index:
+                visit(dep)
+                low[module] = min(low[module], low[dep])
+            elif dep in on_stack:
+                low[module] = min(low[module], index[dep])
+        if low[module] == index[module]:
+            component = []
+            while True:
+                member = stack.pop()
+                on_stack.discard(member)
+                component.append(member)
+                if member == module:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for module in sorted(graph):
+        if module not in index:
+            visit(module)
+    return cycles
+
+
+def test_the_import_graph_has_no_cycle() -> None:
+    cycles = import_cycles(project_imports(type_checking=False))
+    assert not cycles, f"modules that import each other (directly or round a ring): {cycles}"
+
+
+#: Layers with a rule of their own: a module may import these only from the layers named.
+#: The live console (``harness.console``, ``harness.console_view``) is a view of the loop's
+#: status, drawn for a run: it sits with the runs.
+_RUNS = ("harness.cli", "harness.commands", "harness.runs", "harness.console", "harness.console_view")
+UPPER_LAYERS = {
+    "harness.commands": ("harness.cli", "harness.commands"),
+    "harness.runs": _RUNS,
+    "harness.loop": (*_RUNS, "harness.loop", "harness.simulation"),
+    "harness.simulation": (*_RUNS, "harness.simulation"),
+}
+
+#: The one exception, and why: the profile is every section's configuration put together,
+#: so it imports each package's ``config`` module (a leaf of plain dataclasses), the loop's too.
+SECTION_CONFIGS = {("harness.profile", "harness.loop.config")}
+
+
+def _in(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
+
+
+def test_imports_run_from_the_commands_down() -> None:
+    graph = project_imports(type_checking=False)
+    upward = sorted(
+        f"{module} -> {dep}"
+        for module, deps in graph.items()
+        for dep in deps
+        for layer, allowed in UPPER_LAYERS.items()
+        if _in(dep, layer) and not any(_in(module, a) for a in allowed) and (module, dep) not in SECTION_CONFIGS
+    )
+    assert not upward, f"imports that run upward: {upward}"
+
+
+def test_the_cycle_finder_finds_a_ring() -> None:
+    ring = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert import_cycles(ring) == [["a", "b", "c"]]
+    assert import_cycles({"a": {"b"}, "b": set()}) == []
 
 
 # --- the helper itself ----------------------------------------------------------------------

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from harness.loop.scheduler import FixedRateScheduler
+from harness.scheduler import FixedRateScheduler
 
 
 class FakeClock:
