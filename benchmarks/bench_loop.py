@@ -138,17 +138,22 @@ def main() -> int:
             print(json.dumps(rows[-1]), flush=True)
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps({"duration_s": args.duration, "rows": rows}, indent=2) + "\n")
-    print("\n| rate | loop lateness median / p99 / p99.9 / max (us) | compute median / p99 (us) | loop-thread CPU median / p99 (us) | overruns | frames lost / received "
-          "| cyclictest normal median / p99 / max (us) | cyclictest FIFO 80 median / p99 / max (us) | loop p99 / cyclictest p99 |")
+    print("\n| rate | loop lateness median / p99 / p99.9 / max (us) | compute median / p99 (us) "
+          "| loop-thread CPU median / p99 (us) | overruns | frames lost / received "
+          "| cyclictest normal median / p99 / max (us) | cyclictest FIFO 80 median / p99 / max (us) "
+          "| loop p99 / cyclictest p99 |")
     print("|---|---|---|---|---|---|---|---|---|")
     for row in rows:
         lp, cn, cf = row["loop"], row["cyclictest_normal"] or {}, row["cyclictest_fifo80"] or {}
         ratio = lp["lateness_p99_us"] / cn["p99_us"] if cn.get("p99_us") else float("nan")
-        print(f"| {row['rate_hz']:.0f} Hz | {lp['lateness_median_us']:.1f} / {lp['lateness_p99_us']:.1f} / {lp['lateness_p999_us']:.0f} / "
-              f"{lp['lateness_max_us']:.0f} | {lp['compute_median_us']:.1f} / {lp['compute_p99_us']:.1f} | "
+        print(f"| {row['rate_hz']:.0f} Hz | {lp['lateness_median_us']:.1f} / {lp['lateness_p99_us']:.1f} / "
+              f"{lp['lateness_p999_us']:.0f} / {lp['lateness_max_us']:.0f} | "
+              f"{lp['compute_median_us']:.1f} / {lp['compute_p99_us']:.1f} | "
               f"{lp['cpu_median_us']:.1f} / {lp['cpu_p99_us']:.1f} | {lp['overruns']} | "
-              f"{lp['frames_lost']} / {lp['frames_received']} | {cn.get('median_us', float('nan')):.0f} / {cn.get('p99_us', float('nan')):.0f} / "
-              f"{cn.get('max_us', float('nan')):.0f} | {cf.get('median_us', float('nan')):.0f} / {cf.get('p99_us', float('nan')):.0f} / "
+              f"{lp['frames_lost']} / {lp['frames_received']} | "
+              f"{cn.get('median_us', float('nan')):.0f} / {cn.get('p99_us', float('nan')):.0f} / "
+              f"{cn.get('max_us', float('nan')):.0f} | "
+              f"{cf.get('median_us', float('nan')):.0f} / {cf.get('p99_us', float('nan')):.0f} / "
               f"{cf.get('max_us', float('nan')):.0f} | {ratio:.2f} |")
     return 0
 

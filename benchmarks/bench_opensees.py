@@ -248,7 +248,7 @@ def build_nodes(ops: ModuleType, building: BuildingConfig) -> None:
 def build_stories(ops: ModuleType, building: BuildingConfig) -> None:
     """One zeroLength spring-dashpot per story: ``Elastic E = k_j`` (N/m), ``eta = c_j`` (N s/m)."""
     damping = building.story_damping()
-    for j, (stiffness, c) in enumerate(zip(building.story_stiffness_N_per_m, damping)):
+    for j, (stiffness, c) in enumerate(zip(building.story_stiffness_N_per_m, damping, strict=True)):
         ops.uniaxialMaterial("Elastic", STORY_MAT0 + j, float(stiffness), float(c))
         ops.element("zeroLength", STORY_ELE0 + j, BASE + j, BASE + j + 1, "-mat", STORY_MAT0 + j, "-dir", 1)
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import itertools
 import json
 import subprocess
 import sys
@@ -98,7 +99,11 @@ def table(results: list[dict], baseline: dict, args: argparse.Namespace) -> str:
     completed = sum(r["outcome"] == "completed" for r in results)
     reasons = collections.Counter(r["trip_reason"] or r["outcome"] for r in results if r["outcome"] != "completed")
     hist = np.sum([r.get("gap_histogram", [0] * (len(GAP_EDGES_MS) + 1)) for r in results], axis=0)
-    labels = [f"< {GAP_EDGES_MS[0]:g}"] + [f"{a:g}-{b:g}" for a, b in zip(GAP_EDGES_MS, GAP_EDGES_MS[1:])] + [f"> {GAP_EDGES_MS[-1]:g}"]
+    labels = (
+        [f"< {GAP_EDGES_MS[0]:g}"]
+        + [f"{a:g}-{b:g}" for a, b in itertools.pairwise(GAP_EDGES_MS)]
+        + [f"> {GAP_EDGES_MS[-1]:g}"]
+    )
     cpu_med = np.nanmedian([r.get("cpu_median_us", np.nan) for r in results])
     cpu_p99 = np.nanmedian([r.get("cpu_p99_us", np.nan) for r in results])
     longest = max((r.get("longest_stall_ms") or 0.0) for r in results)
@@ -112,7 +117,8 @@ def table(results: list[dict], baseline: dict, args: argparse.Namespace) -> str:
         f"| {case} | {completed} / {len(results)} | {dict(reasons) or 'none'} | {cpu_med:.0f} / {cpu_p99:.0f} | "
         f"{longest:.1f} | {hold:.0f} | {baseline['p50_us']:.1f} / {baseline['p99_us']:.0f} / {baseline['max_us']:.0f} |",
         "",
-        "Gaps between tick starts, all runs (ms): " + ", ".join(f"{label}: {int(n)}" for label, n in zip(labels, hist)),
+        "Gaps between tick starts, all runs (ms): "
+        + ", ".join(f"{label}: {int(n)}" for label, n in zip(labels, hist, strict=True)),
     ]
     return "\n".join(lines)
 

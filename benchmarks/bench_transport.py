@@ -70,7 +70,9 @@ def stats_us(samples_ns: list[int]) -> dict[str, float]:
     }
 
 
-def time_round_trips(send: Callable[[], None], wait_reply: Callable[[], can.Message | None], count: int, warmup: int) -> list[int]:
+def time_round_trips(
+    send: Callable[[], None], wait_reply: Callable[[], can.Message | None], count: int, warmup: int
+) -> list[int]:
     samples = []
     clock = time.perf_counter_ns
     for k in range(warmup + count):
@@ -89,7 +91,10 @@ def two_processes(mode: str, count: int, warmup: int) -> dict[str, float]:
     """Main process is the hub; an echo process joins; ``mode`` is ``poll`` or ``block`` for both sides."""
     channel = f"bench-{uuid.uuid4().hex}"
     bus = can.Bus(interface="seqpacket", channel=channel)
-    code = f"import sys; sys.path.insert(0, {str(REPO)!r}); from benchmarks.bench_transport import echo_main; echo_main(*sys.argv[1:])"
+    code = (
+        f"import sys; sys.path.insert(0, {str(REPO)!r}); "
+        "from benchmarks.bench_transport import echo_main; echo_main(*sys.argv[1:])"
+    )
     child = subprocess.Popen([sys.executable, "-c", code, channel, mode], stdout=subprocess.PIPE, text=True, cwd=REPO)
     try:
         assert child.stdout is not None and child.stdout.readline().strip() == "ready"
@@ -195,7 +200,8 @@ def main() -> int:
     load = (load_before, os.getloadavg()[0])
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps({"count": args.count, "warmup": args.warmup, "loadavg_1min": load, "rows": rows}, indent=2) + "\n")
+        document = {"count": args.count, "warmup": args.warmup, "loadavg_1min": load, "rows": rows}
+        Path(args.json).write_text(json.dumps(document, indent=2) + "\n")
     print(f"\nRound trip of one 8-byte frame, {args.count} timed after {args.warmup} warm-up (python-can {can.__version__}, "
           f"{os.cpu_count()} CPUs, 1-min load average {load[0]:.2f} before / {load[1]:.2f} after):\n")
     print("| case | median (us) | p99 (us) | max (us) |")

@@ -152,9 +152,12 @@ class MessageCodec:
             Wrong number of values, or a value outside the DBC range (NaN included).
         """
         if len(values) != len(self.signals):
-            raise ProtocolError(f"{self.name}: {len(values)} values instead of {len(self.signals)} ({', '.join(self.signal_names)})")
+            raise ProtocolError(
+                f"{self.name}: {len(values)} values instead of {len(self.signals)} ({', '.join(self.signal_names)})"
+            )
         word = 0
-        for value, (lo, hi, offset, scale, raw_min, raw_max, mask, start, is_float) in zip(values, self._pack_plan):
+        # no strict=: the lengths were checked just above, and zip with a keyword costs 0.3 us a frame
+        for value, (lo, hi, offset, scale, raw_min, raw_max, mask, start, is_float) in zip(values, self._pack_plan):  # noqa: B905
             if not lo <= value <= hi:
                 self._refuse(values)
             if is_float:
@@ -166,7 +169,7 @@ class MessageCodec:
         data[0 : self.length] = word.to_bytes(self.length, "little")
 
     def _refuse(self, values: Sequence[float]) -> None:
-        for sig, value, plan in zip(self.signals, values, self._pack_plan):
+        for sig, value, plan in zip(self.signals, values, self._pack_plan, strict=True):
             if not plan[0] <= value <= plan[1]:
                 raise ProtocolError(
                     f"{self.name}.{sig.name}: {value!r} {sig.unit} is outside {sig.minimum:g}..{sig.maximum:g} {sig.unit}"
@@ -185,7 +188,9 @@ class MessageCodec:
                 raise ProtocolError(f"{self.name} has no signal {sorted(unknown)[0]!r}; expected: {', '.join(self.signal_names)}")
             missing = [name for name in self.signal_names if name not in values]
             if missing:
-                raise ProtocolError(f"{self.name}: no value for signal {missing[0]!r}; expected all of: {', '.join(self.signal_names)}")
+                raise ProtocolError(
+                    f"{self.name}: no value for signal {missing[0]!r}; expected all of: {', '.join(self.signal_names)}"
+                )
             values = [values[name] for name in self.signal_names]
         data = bytearray(self.length)
         self.encode_into(data, values, counter)
@@ -336,6 +341,7 @@ def load_protocol(path: str | Path | None = None) -> Protocol:
         database = cantools.database.load_string(text, database_format="dbc")
     except Exception as err:  # cantools raises several unrelated types for a bad file
         raise ProtocolError(f"{dbc}: not a readable DBC file: {_printable(str(err))}") from err
+    assert isinstance(database, cantools.database.can.Database), "a DBC file loads as a CAN database"
     return Protocol(database, dbc)
 
 

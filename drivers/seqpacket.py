@@ -177,7 +177,9 @@ def parse_channel(channel: object) -> ChannelAddress:
     if not _NAME_RE.fullmatch(name):
         raise BusError(f"seqpacket channel {channel!r} is not a usable name; {expected}")
     if len(name.encode()) > _MAX_NAME_BYTES:
-        raise BusError(f"seqpacket channel {channel!r} is {len(name)} characters; at most {_MAX_NAME_BYTES} fit an abstract socket address")
+        raise BusError(
+            f"seqpacket channel {channel!r} is {len(name)} characters; at most {_MAX_NAME_BYTES} fit an abstract socket address"
+        )
     return ChannelAddress(channel, ABSTRACT_PREFIX + name, None)
 
 
@@ -607,7 +609,9 @@ class SeqPacketBus(BusABC):
             pass
         else:
             if not stat.S_ISSOCK(info.st_mode):
-                raise BusError(f"seqpacket channel path {self.channel!r} exists and is not a socket; remove it or pick another path")
+                raise BusError(
+                    f"seqpacket channel path {self.channel!r} exists and is not a socket; remove it or pick another path"
+                )
             os.unlink(self._addr.address)  # stale: connect was refused (we hold the directory lock)
         self._become_hub()
 

@@ -42,7 +42,9 @@ class FixedRateScheduler:
         Overruns in a row, reset by a tick on time.
     """
 
-    __slots__ = ("period_s", "spin_s", "_clock", "_sleep", "_start", "_deadline", "tick", "lateness_s", "overruns", "consecutive_overruns")
+    __slots__ = (
+        "period_s", "spin_s", "_clock", "_sleep", "_start", "_deadline", "tick", "lateness_s", "overruns", "consecutive_overruns",
+    )
 
     def __init__(
         self,

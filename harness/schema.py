@@ -20,12 +20,16 @@ import math
 import types
 import typing
 from collections.abc import Mapping
-from typing import Any, Literal, TypeVar, Union, get_args, get_origin, get_type_hints
+from typing import TYPE_CHECKING, Any, Literal, TypeVar, Union, get_args, get_origin, get_type_hints
 
 from harness.errors import ProfileError
 from harness.units import UnitError, parse_quantity
 
-T = TypeVar("T")
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+#: A configuration section: a dataclass.
+T = TypeVar("T", bound="DataclassInstance")
 
 _RANGE_KEYS = ("gt", "ge", "lt", "le")
 
@@ -149,7 +153,7 @@ def _build_value(tp: Any, value: Any, meta: Mapping[str, Any], path: str, source
         return _build_tuple(tp, value, meta, path, source)
     if origin in (dict, Mapping, typing.Mapping):
         return _build_mapping(tp, value, path, source)
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return build(tp, value, source=source, path=path)
     raise TypeError(f"schema type {tp!r} at {path} is not supported")
 
@@ -160,7 +164,7 @@ def _build_union(tp: Any, value: Any, meta: Mapping[str, Any], path: str, source
         if type(None) in get_args(tp):
             return None
         raise ProfileError("found nothing (null), expected a value", source, path)
-    classes = [opt for opt in options if dataclasses.is_dataclass(opt)]
+    classes = [opt for opt in options if isinstance(opt, type) and dataclasses.is_dataclass(opt)]
     if classes and isinstance(value, Mapping) and len(classes) > 1:
         kinds = {get_args(get_type_hints(c)["kind"])[0]: c for c in classes}
         kind = value.get("kind")
@@ -190,10 +194,12 @@ def _build_tuple(tp: Any, value: Any, meta: Mapping[str, Any], path: str, source
     min_len = meta.get("min_len")
     if min_len is not None and len(value) < min_len:
         raise ProfileError(f"found {len(value)} values, expected at least {min_len}", source, path)
-    return tuple(_build_value(et, v, meta, f"{path}[{i}]", source) for i, (et, v) in enumerate(zip(element_types, value)))
+    return tuple(
+        _build_value(et, v, meta, f"{path}[{i}]", source) for i, (et, v) in enumerate(zip(element_types, value, strict=True))
+    )
 
 
-def _build_mapping(tp: Any, value: Any, path: str, source: str | None) -> dict:
+def _build_mapping(tp: Any, value: Any, path: str, source: str | None) -> Mapping[str, Any]:
     if not isinstance(value, Mapping):
         raise ProfileError(f"found {_describe(value)}, expected a mapping of names", source, path)
     key_type, value_type = get_args(tp)

@@ -76,7 +76,7 @@ def differences(old, new, path: str = "", rel_tol: float = 1e-12) -> list[str]:
             found += differences(old[key], new[key], f"{path}/{key}", 1e-2 if key == "dry_run" else rel_tol)
         return found
     if isinstance(old, list) and isinstance(new, list) and len(old) == len(new):
-        return [d for i, (a, b) in enumerate(zip(old, new)) for d in differences(a, b, f"{path}[{i}]", rel_tol)]
+        return [d for i, (a, b) in enumerate(zip(old, new, strict=True)) for d in differences(a, b, f"{path}[{i}]", rel_tol)]
     if isinstance(old, float) and isinstance(new, float):
         return [] if math.isclose(old, new, rel_tol=rel_tol, abs_tol=1e-15) else [f"{path}: {old!r} -> {new!r}"]
     return [] if old == new else [f"{path}: {old!r} -> {new!r}"]

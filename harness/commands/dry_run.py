@@ -58,8 +58,10 @@ def add_parser(sub) -> None:
     loop = parser.add_argument_group("loop")
     loop.add_argument("--rate", type=number_in(RATE), metavar="HZ",
                       help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}")
-    loop.add_argument("--controller", type=non_empty, metavar="NAME", help="a design of the profile (default: control.controller)")
-    loop.add_argument("--lockstep", action="store_true", help="the rig advances one step per command (deterministic; slow machines)")
+    loop.add_argument("--controller", type=non_empty, metavar="NAME",
+                      help="a design of the profile (default: control.controller)")
+    loop.add_argument("--lockstep", action="store_true",
+                      help="the rig advances one step per command (deterministic; slow machines)")
     loop.add_argument("--external-rig", action="store_true", help="a `harness rig` already serves the channel; do not start one")
     output = parser.add_argument_group("output")
     output.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
@@ -90,6 +92,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     title = "peak responses: simulated passive reference and the dry run"
     if result.span_s is not None:
         title += f", over the {result.span_s:.2f} s of record that ran before the run ended ({session.outcome})"
+    assert result.passive is not None, "the command's dry run is compared (DryRunOptions.compare)"
     table = reduction_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run"))
     console.print(table.to_rich())
     worst, difference_pct = result.largest_twin_difference()

@@ -15,10 +15,14 @@ def progress_bar(console: Console, enabled: bool):
 
 
 def compile_kernels(console: Console) -> None:
-    """Compile the numba kernels up front, saying so when it takes a while (the first run of a checkout)."""
+    """Compile the numba kernels up front; the spinner shows only when numba's cache does not hold them."""
+    from harness.kernel_cache import kernels_cached
     from harness.model.warmup import warm_up
 
-    with console.status("compiling the integration kernels (first run of a checkout only, about a minute) ..."):
+    if kernels_cached():  # loaded from the cache in about half a second: nothing to announce
+        warm_up()
+        return
+    with console.status("compiling the integration kernels (after a change of their source, about a minute) ..."):
         warm_up()
 
 

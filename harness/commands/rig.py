@@ -6,6 +6,7 @@ import argparse
 
 from rich.console import Console
 
+from harness import exit_codes
 from harness.commands.options import (
     EPILOG,
     PID,
@@ -56,7 +57,13 @@ def run(args: argparse.Namespace, console: Console) -> int:
         profile = load_acknowledged(args, console)  # the rig serves the harness's profile: the same acknowledgement
         profile = resolve_profile(profile, study_options(args, rate_hz=args.rate))
         can_config = profile.can_settings(args.interface, args.channel)
+        if can_config.interface == "virtual":  # python-can's virtual bus lives inside one process
+            console.print("[bold red]error:[/] python-can's 'virtual' interface is a bus inside one process: no other "
+                          "process could reach this rig. Serve it on a bus other processes share: --interface seqpacket "
+                          "(a Unix socket, no set-up) or --interface socketcan --channel vcan0", highlight=False)
+            return exit_codes.INPUT_ERROR
         compile_kernels(console)
-        console.print(f"virtual rig on {can_config.interface}:{can_config.channel}"
-                      f"{' (lockstep)' if args.lockstep else ''}; Ctrl-C stops it")
+        console.print(f"virtual rig on interface {can_config.interface!r}, channel {can_config.channel!r}"
+                      f"{' (lockstep)' if args.lockstep else ''}; `harness dry-run --external-rig --interface "
+                      f"{can_config.interface} --channel {can_config.channel}` reaches it; Ctrl-C stops it", highlight=False)
         return serve_rig(profile, can_config, lockstep=args.lockstep, seed=args.seed, parent_pid=args.parent_pid)

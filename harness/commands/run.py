@@ -91,7 +91,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
         try:
             answer = console.input(
                 f"Arm the actuator on {can.interface}:{can.channel} with {controller} for {motion.duration_s:.1f} s "
-                f"(max force {profile.safety.force.max_force_N / 1e3:g} kN, hard stroke {profile.safety.stroke.hard_limit_m * 1e3:g} mm)? [y/N] "
+                f"(max force {profile.safety.force.max_force_N / 1e3:g} kN, "
+                f"hard stroke {profile.safety.stroke.hard_limit_m * 1e3:g} mm)? [y/N] "
             )
         except (EOFError, OSError):  # no terminal to answer from (stdin closed or captured): that is a no
             answer = ""

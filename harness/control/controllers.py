@@ -87,7 +87,7 @@ class StateFeedbackSMC(_SlidingModeInternals):
         ``None`` means full state.
     """
 
-    needs_full_state = True
+    needs_full_state: ClassVar[bool] = True
 
     def __init__(
         self,
@@ -144,9 +144,11 @@ class PhiSMC(_SlidingModeInternals):
         Sliding margin (>= 0), N kg s/m.
     """
 
-    needs_full_state = False
+    needs_full_state: ClassVar[bool] = False
 
-    def __init__(self, name: str, base_mass_kg: float, restoring_stiffness_N_per_m: float, p1_per_s: float, phi: float, delta: float):
+    def __init__(
+        self, name: str, base_mass_kg: float, restoring_stiffness_N_per_m: float, p1_per_s: float, phi: float, delta: float
+    ):
         self.name = name
         self.base_mass_kg = float(base_mass_kg)
         self.restoring_stiffness_N_per_m = float(restoring_stiffness_N_per_m)

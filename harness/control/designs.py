@@ -7,7 +7,7 @@ the design dataclasses below, told apart by ``kind``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 
@@ -84,7 +84,7 @@ class PhiDesign:
     delta: float = quantity(0.0, ge=0, doc=DELTA_DOC)
 
 
-ControllerDesign = Union[FullStateDesign, StaticOutputDesign, SimpleOutputDesign, PhiDesign]
+ControllerDesign = FullStateDesign | StaticOutputDesign | SimpleOutputDesign | PhiDesign
 
 
 def state_names(n_stories: int) -> list[str]:
@@ -101,6 +101,7 @@ def _surface(surface: SurfaceConfig, design_building: BuildingConfig) -> np.ndar
     model = state_space(design_building)
     if surface.method == "lqr":
         q = surface.q
+        assert q is not None, "SurfaceConfig.__post_init__: lqr needs q"
         return lqr_surface(model, q_diagonal_from_groups(model.n_stories, q.drifts, q.base_displacement, q.velocities))
     return pole_surface(model, np.asarray(surface.poles_per_s))
 
@@ -121,7 +122,9 @@ def build_controller(name: str, design: ControllerDesign, design_building: Build
     """
     if isinstance(design, (SimpleOutputDesign, PhiDesign)):
         phi = 1.0 if isinstance(design, SimpleOutputDesign) else design.phi
-        return PhiSMC(name, design_building.base_mass_kg, design_building.restoring_stiffness_N_per_m, design.p1_per_s, phi, design.delta)
+        return PhiSMC(
+            name, design_building.base_mass_kg, design_building.restoring_stiffness_N_per_m, design.p1_per_s, phi, design.delta
+        )
     p_row = _surface(design.surface, design_building)
     model = state_space(design_building)
     mask = _measured_mask(design.measured, design_building.n_stories) if isinstance(design, StaticOutputDesign) else None

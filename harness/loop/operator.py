@@ -9,7 +9,13 @@ from __future__ import annotations
 
 import signal
 import threading
+from collections.abc import Callable
 from types import FrameType
+from typing import Any, TypeAlias
+
+#: What ``signal.signal`` takes and returns: a handler, ``SIG_DFL``/``SIG_IGN`` (ints), or None
+#: (a handler not installed from Python).
+SignalHandler: TypeAlias = Callable[[int, FrameType | None], Any] | int | None
 
 
 class OperatorSignals:
@@ -27,7 +33,7 @@ class OperatorSignals:
         self.stop_requested = False
         self.trip_requested = False
         self.interrupts = 0
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, SignalHandler] = {}
 
     def _on_interrupt(self, signum: int, frame: FrameType | None) -> None:
         self.interrupts += 1
@@ -39,7 +45,7 @@ class OperatorSignals:
     def _on_terminate(self, signum: int, frame: FrameType | None) -> None:
         self.trip_requested = True
 
-    def install(self) -> "OperatorSignals":
+    def install(self) -> OperatorSignals:
         """Install the handlers if this is the main thread (otherwise signals stay as they are)."""
         if threading.current_thread() is threading.main_thread():
             self._previous[signal.SIGINT] = signal.signal(signal.SIGINT, self._on_interrupt)
@@ -52,7 +58,7 @@ class OperatorSignals:
             signal.signal(signum, handler)
         self._previous.clear()
 
-    def __enter__(self) -> "OperatorSignals":
+    def __enter__(self) -> OperatorSignals:
         return self.install()
 
     def __exit__(self, *exc) -> None:

@@ -22,10 +22,14 @@ from harness.loop.realtime import apply_realtime, restore_realtime
 from harness.loop.status import LoopStatus  # re-exported: it lived here before
 from harness.loop.tick import ControlTick
 from harness.loop.timing import TimingStats
+from harness.recording.layout import Outcome
 from harness.safety.lifecycle import State
+from harness.safety.supervisor import SupervisedCommand
 from harness.scheduler import FixedRateScheduler
 
 _FINAL = (State.DONE, State.TRIPPED)
+#: The outcome of a run that ended in each final state (any other: ``stopped``).
+_OUTCOME_OF: dict[State, Outcome] = {State.DONE: "completed", State.TRIPPED: "tripped"}
 #: Longest wait for the table controller's RIG_STATUS ``table_running`` after RIG_CONTROL start (s).
 TABLE_START_TIMEOUT_S = 2.0
 
@@ -42,7 +46,7 @@ class ArmTimeout(SafetyError):
 class LoopResult:
     """How the run ended and its timing."""
 
-    outcome: str
+    outcome: Outcome
     trip_reason: str = ""
     trip_detail: str = ""
     timing: dict = field(default_factory=dict)
@@ -113,7 +117,9 @@ class ControlLoop:
         #: The stall budget (s): ridden through up to here, tripped beyond (the supervisor's ``loop_stall``).
         self.max_stall_s = tick.supervisor.config.run.max_stall_s
 
-    def _phase(self, t: float, run_started: float | None, duration_s: float, armed_at: float | None):
+    def _phase(
+        self, t: float, run_started: float | None, duration_s: float, armed_at: float | None
+    ) -> tuple[float | None, float | None, bool]:
         """Advance the phases after a tick; returns (run_started, armed_at, finished)."""
         supervisor = self.tick.supervisor
         state = supervisor.state
@@ -126,15 +132,19 @@ class ControlLoop:
             except SafetyError as err:
                 if t >= self.config.arm_timeout_s:
                     raise ArmTimeout(str(err), self.config.arm_timeout_s) from err
-        elif state is State.ARMED and t - armed_at >= self.config.settle_s:
-            supervisor.start(t)
-            run_started = t
-            self._awaiting_table = self.table_running is not None
-            self.on_start(t)
-        elif state is State.RUNNING and self._awaiting_table:
-            run_started = self._await_table(t, run_started)
-        elif state is State.RUNNING and t - run_started >= duration_s + self.config.tail_s:
-            supervisor.stop(t, "record finished")
+        elif state is State.ARMED:
+            assert armed_at is not None, "ARMED only after arm() succeeded here"
+            if t - armed_at >= self.config.settle_s:
+                supervisor.start(t)
+                run_started = t
+                self._awaiting_table = self.table_running is not None
+                self.on_start(t)
+        elif state is State.RUNNING:
+            assert run_started is not None, "RUNNING only after start() here"
+            if self._awaiting_table:
+                run_started = self._await_table(t, run_started)
+            elif t - run_started >= duration_s + self.config.tail_s:
+                supervisor.stop(t, "record finished")
         return run_started, armed_at, state in _FINAL
 
     def _await_table(self, t: float, started: float) -> float:
@@ -144,6 +154,7 @@ class ControlLoop:
         the time RUNNING began, and a safe stop if the table has not reported running within
         :data:`TABLE_START_TIMEOUT_S`.
         """
+        assert self.table_running is not None, "awaiting the table only when there is a table link"
         if self.table_running():
             self._awaiting_table = False
             return t
@@ -195,7 +206,7 @@ class ControlLoop:
         tick, health = self.tick, self.tick.health
         run_started = armed_at = None
         finished_at = None
-        outcome = "error"
+        outcome: Outcome = "error"
         self.signals.install()
         threads = [thread.name for thread in threading.enumerate()]  # what shares the interpreter with the loop
         try:
@@ -231,7 +242,7 @@ class ControlLoop:
                 tick.supervisor.report_exception(t, exc)
                 tick.send_disable(t)
             state = tick.supervisor.state
-            outcome = {State.DONE: "completed", State.TRIPPED: "tripped"}.get(state, "stopped")
+            outcome = _OUTCOME_OF.get(state, "stopped")
             if outcome == "completed" and self.signals.stop_requested:
                 outcome = "stopped"
         finally:
@@ -243,14 +254,17 @@ class ControlLoop:
             outcome=outcome,
             trip_reason=tick.supervisor.command.trip_reason,
             trip_detail=tick.supervisor.trip_detail,
-            timing={**timing.summary(), "threads": threads, "stalls_ridden_through": self.stalls, "longest_stall_s": self.longest_stall_s,
-                    "stall_budget_s": self.max_stall_s, "lockstep": self.lockstep is not None},
+            timing={**timing.summary(), "threads": threads, "stalls_ridden_through": self.stalls,
+                    "longest_stall_s": self.longest_stall_s, "stall_budget_s": self.max_stall_s,
+                    "lockstep": self.lockstep is not None},
             realtime_report=report.lines,
             operator_stopped=self.signals.stop_requested,
             record_start_t_s=run_started,
         )
 
-    def _update_status(self, t: float, run_started: float | None, duration_s: float, command, lateness_s: float) -> None:
+    def _update_status(
+        self, t: float, run_started: float | None, duration_s: float, command: SupervisedCommand, lateness_s: float
+    ) -> None:
         """Write this tick into the shared status block (no allocation; text only when it changed).
 
         Parameters
@@ -261,7 +275,7 @@ class ControlLoop:
             Loop time RUNNING began (s); None before.
         duration_s : float
             Seconds of record (s).
-        command
+        command : SupervisedCommand
             The tick's command (state, force, trip reason).
         lateness_s : float
             The tick's wake-up lateness (s), for the console's percentiles.

@@ -11,7 +11,14 @@ record time follows the harness's clock, and a trip cannot stop the table.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from drivers.protocol_values import RigCommand
+
+if TYPE_CHECKING:
+    from drivers.link import HarnessLink
+    from drivers.reader import Sample
+    from drivers.writer import HarnessWriter
 
 
 class CanTableLink:
@@ -30,17 +37,17 @@ class CanTableLink:
 
     def __init__(self, lockstep: bool = False) -> None:
         self.lockstep = lockstep
-        self.writer = None
-        self._status = None
+        self.writer: HarnessWriter | None = None
+        self._status: Sample | None = None
         self._running_i = 0
         self.starts = 0
         self.stops = 0
 
-    def attach(self, link) -> None:
+    def attach(self, link: HarnessLink) -> None:
         """Use the open harness ``link`` (its writer for RIG_CONTROL, its reader's RIG_STATUS sample)."""
         self.writer = link.writer
-        self._status = link.reader.sample("RIG_STATUS")
-        self._running_i = self._status.index("table_running")
+        status = self._status = link.reader.sample("RIG_STATUS")
+        self._running_i = status.index("table_running")
 
     def start(self, t: float) -> None:
         """RUNNING begins: send RIG_CONTROL start table (``t`` is the loop's time, s)."""

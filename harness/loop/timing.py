@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.memory import prefaulted_zeros
+from harness.memory import float_view, prefaulted_zeros
 
 
 class TimingStats:
@@ -23,7 +23,7 @@ class TimingStats:
         self.lateness_s = prefaulted_zeros(self._capacity)
         self.compute_s = prefaulted_zeros(self._capacity)
         self.cpu_s = prefaulted_zeros(self._capacity)
-        self._views = (memoryview(self.lateness_s), memoryview(self.compute_s), memoryview(self.cpu_s))
+        self._views = (float_view(self.lateness_s), float_view(self.compute_s), float_view(self.cpu_s))
         self.count = 0
         self.overruns = 0
 

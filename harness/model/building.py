@@ -71,10 +71,12 @@ class BuildingConfig:
         """Story damping c_1..c_n (N s/m), resolving ``first_mode_damping_ratio`` if used."""
         if self.story_damping_Ns_per_m is not None:
             return np.asarray(self.story_damping_Ns_per_m, dtype=float)
+        ratio = self.first_mode_damping_ratio
+        assert ratio is not None, "__post_init__: exactly one of the two is given"
         omega_1 = fixed_base_modes(self, np.zeros(self.n_stories))[0][0]
-        return 2.0 * self.first_mode_damping_ratio / omega_1 * np.asarray(self.story_stiffness_N_per_m, dtype=float)
+        return 2.0 * ratio / omega_1 * np.asarray(self.story_stiffness_N_per_m, dtype=float)
 
-    def with_stiffness_scale(self, scale: float) -> "BuildingConfig":
+    def with_stiffness_scale(self, scale: float) -> BuildingConfig:
         """A copy with every story stiffness multiplied by ``scale`` (design-model mismatch studies)."""
         from dataclasses import replace
 

@@ -77,7 +77,7 @@ def derivative(
     record_dt: float,
 ) -> None:
     """``out = dy/dt`` for ``y = (Z, nu)`` (Eq. 3-7), actuator force ``u`` (N)."""
-    size = a_matrix.shape[0]
+    size: int = a_matrix.shape[0]  # numpy's stubs give shape entries no type
     x0, v0 = table_state(t, accel, velocity, displacement, record_dt)
     sliding_velocity = y[size - 1] - v0
     nu = y[size]
@@ -159,22 +159,40 @@ def advance(
         step = remaining if truncated else h
         for i in range(n):
             ytmp[i] = y[i] + step * _A21 * k1[i]
-        derivative(t + _C2 * step, ytmp, k2, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt)
+        derivative(
+            t + _C2 * step, ytmp, k2, u, a_matrix, b_vector, restoring_stiffness, bearing,
+            accel, velocity, displacement, record_dt,
+        )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A31 * k1[i] + _A32 * k2[i])
-        derivative(t + _C3 * step, ytmp, k3, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt)
+        derivative(
+            t + _C3 * step, ytmp, k3, u, a_matrix, b_vector, restoring_stiffness, bearing,
+            accel, velocity, displacement, record_dt,
+        )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A41 * k1[i] + _A42 * k2[i] + _A43 * k3[i])
-        derivative(t + _C4 * step, ytmp, k4, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt)
+        derivative(
+            t + _C4 * step, ytmp, k4, u, a_matrix, b_vector, restoring_stiffness, bearing,
+            accel, velocity, displacement, record_dt,
+        )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A51 * k1[i] + _A52 * k2[i] + _A53 * k3[i] + _A54 * k4[i])
-        derivative(t + _C5 * step, ytmp, k5, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt)
+        derivative(
+            t + _C5 * step, ytmp, k5, u, a_matrix, b_vector, restoring_stiffness, bearing,
+            accel, velocity, displacement, record_dt,
+        )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A61 * k1[i] + _A62 * k2[i] + _A63 * k3[i] + _A64 * k4[i] + _A65 * k5[i])
-        derivative(t + step, ytmp, k6, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt)
+        derivative(
+            t + step, ytmp, k6, u, a_matrix, b_vector, restoring_stiffness, bearing,
+            accel, velocity, displacement, record_dt,
+        )
         for i in range(n):
             ynew[i] = y[i] + step * (_B1 * k1[i] + _B3 * k3[i] + _B4 * k4[i] + _B5 * k5[i] + _B6 * k6[i])
-        derivative(t + step, ynew, k7, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt)
+        derivative(
+            t + step, ynew, k7, u, a_matrix, b_vector, restoring_stiffness, bearing,
+            accel, velocity, displacement, record_dt,
+        )
         error = 0.0
         for i in range(n):
             e = step * (_E1 * k1[i] + _E3 * k3[i] + _E4 * k4[i] + _E5 * k5[i] + _E6 * k6[i] + _E7 * k7[i])

@@ -33,7 +33,7 @@ class TableMotion:
     displacement_m: np.ndarray
 
     @classmethod
-    def from_motion(cls, motion) -> "TableMotion":
+    def from_motion(cls, motion) -> TableMotion:
         """From any object with ``dt_s``, ``accel_m_s2``, ``velocity_m_s``, ``displacement_m``."""
         return cls(
             float(motion.dt_s),
@@ -43,7 +43,7 @@ class TableMotion:
         )
 
     @classmethod
-    def at_rest(cls, duration_s: float = 1.0, dt_s: float = 0.01) -> "TableMotion":
+    def at_rest(cls, duration_s: float = 1.0, dt_s: float = 0.01) -> TableMotion:
         """A table that does not move."""
         n = int(round(duration_s / dt_s)) + 1
         zeros = np.zeros(n)

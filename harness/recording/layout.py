@@ -22,7 +22,7 @@ A run folder (one per run, under ``logs/``) contains:
 from __future__ import annotations
 
 import re
-from typing import Final, Literal, get_args
+from typing import Final, Literal, cast, get_args
 
 from harness.errors import HarnessError
 
@@ -100,15 +100,15 @@ def check_columns(columns: tuple[str, ...] | list[str]) -> tuple[str, ...]:
     return names
 
 
-def check_kind(kind: str) -> str:
+def check_kind(kind: str) -> RunKind:
     """Return ``kind`` if it is a known run kind; raise RunFolderError otherwise."""
     if kind not in RUN_KINDS:
         raise RunFolderError(f"found run kind {kind!r}, expected one of {', '.join(RUN_KINDS)}")
-    return kind
+    return cast(RunKind, kind)
 
 
-def check_outcome(outcome: str) -> str:
+def check_outcome(outcome: str) -> Outcome:
     """Return ``outcome`` if it is a known outcome; raise RunFolderError otherwise."""
     if outcome not in OUTCOMES:
         raise RunFolderError(f"found outcome {outcome!r}, expected one of {', '.join(OUTCOMES)}")
-    return outcome
+    return cast(Outcome, outcome)

@@ -84,7 +84,7 @@ def git_dirty(cwd: Path | None = None, timeout_s: float = GIT_TIMEOUT_S) -> bool
 
 def utc_now() -> _dt.datetime:
     """The current time, timezone-aware UTC."""
-    return _dt.datetime.now(_dt.timezone.utc)
+    return _dt.datetime.now(_dt.UTC)
 
 
 def iso(moment: _dt.datetime) -> str:

@@ -231,8 +231,10 @@ def _read_profile(path: Path) -> dict[str, Any]:
 
 def record_loss_text(metadata: Mapping[str, Any]) -> str:
     """One sentence on what a run's recorder lost, from ``metadata.json`` (``record_complete`` false)."""
-    recorder = metadata.get("recorder") if isinstance(metadata.get("recorder"), Mapping) else {}
-    lost = recorder.get("lost") if isinstance(recorder.get("lost"), Mapping) else {}
+    found = metadata.get("recorder")
+    recorder: Mapping[str, Any] = found if isinstance(found, Mapping) else {}
+    found = recorder.get("lost")
+    lost: Mapping[str, Any] = found if isinstance(found, Mapping) else {}
     counts = ", ".join(f"{lost[key]} {key}" for key in ("rows", "frames", "events") if lost.get(key))
     error = recorder.get("error")
     return (

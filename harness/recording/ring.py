@@ -22,7 +22,7 @@ import can
 import numpy as np
 
 from harness.errors import HarnessError
-from harness.memory import prefaulted_zeros
+from harness.memory import float_view, prefaulted_zeros
 
 #: Bit layout of :attr:`FrameRing.flags`.
 FLAG_EXTENDED = 1
@@ -141,11 +141,11 @@ class FrameRing:
         self._data = bytearray(capacity * MAX_DATA)
         self._data_view = memoryview(self._data)
         # the tick writes through memoryviews of the same memory: a third of a numpy item store
-        self._timestamp_mv = memoryview(self._timestamp)
-        self._id_mv = memoryview(self._arbitration_id)
-        self._dlc_mv = memoryview(self._dlc)
-        self._flags_mv = memoryview(self._flags)
-        self._channel_mv = memoryview(self._channel)
+        self._timestamp_mv = float_view(self._timestamp)
+        self._id_mv = self._arbitration_id.data  # memoryview(array): integer items
+        self._dlc_mv = self._dlc.data
+        self._flags_mv = self._flags.data
+        self._channel_mv = self._channel.data
         self._channels: dict[Any, int] = {None: 0}
         self._channel_names: list[Any] = [None]
         self._write = 0

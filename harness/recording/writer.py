@@ -256,9 +256,9 @@ class RunWriter:
     def _report_drops(self) -> None:
         now = (self.rows.dropped, self.frames.dropped, self.events_dropped)
         if now != self._reported_drops:
-            new = {key: a - b for key, a, b in zip(("rows", "frames", "events"), now, self._reported_drops)}
+            new = {key: a - b for key, a, b in zip(("rows", "frames", "events"), now, self._reported_drops, strict=True)}
             self._reported_drops = now
-            total = dict(zip(("rows", "frames", "events"), now))
+            total = dict(zip(("rows", "frames", "events"), now, strict=True))
             self._write_event_line(None, time.time(), "warning", "recorder_dropped", {"new": new, "total": total})
 
     def _write_events(self) -> int:

@@ -228,7 +228,7 @@ class FaultSet:
     def active_ids(self) -> tuple[int, ...]:
         """Ids of the active faults (for snapshots and logs)."""
         kinds, targets = np.nonzero(self.active)
-        return tuple(int(10 * k + t) for k, t in zip(kinds, targets))
+        return tuple(int(10 * k + t) for k, t in zip(kinds, targets, strict=True))
 
 
 def schedule_from(specs) -> tuple[ScheduledFault, ...]:

@@ -19,7 +19,7 @@ class RigParts:
     rtol: float = 1e-6
 
     @classmethod
-    def from_profile(cls, profile) -> "RigParts":
+    def from_profile(cls, profile) -> RigParts:
         """From a :class:`~harness.profile.Profile` (its ``rig`` section, or the defaults)."""
         return cls(profile.structure, profile.bearing, getattr(profile, "rig", None) or RigConfig(), profile.simulation.rtol)
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 
 from harness import exit_codes
@@ -33,7 +33,7 @@ def run_rig_command(
     options: StudyOptions | None = None,
     seed: int | None = None,
     variant: str | None = None,
-    overrides: Sequence[str] = (),
+    overrides: list[str] | tuple[str, ...] = (),
     stop_event: threading.Event | None = None,
     clock: Callable[[], float] = time.monotonic,
     on_ready: Callable[[VirtualRig], None] | None = None,

@@ -21,7 +21,7 @@ from harness.control.factory import (
 )
 from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
-from harness.motions import check_table_limits, load_motion
+from harness.motions import GroundMotion, check_table_limits, load_motion
 from harness.profile import Profile
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 
@@ -50,7 +50,7 @@ class StudyResult:
     """Both cases of a study and what they were run with."""
 
     profile: Profile
-    motion: object
+    motion: GroundMotion
     controller_name: str
     settings: SamplingSettings
     design_stiffness_scale: float
@@ -81,7 +81,7 @@ class StudyResult:
         Path(path).write_text(json.dumps(self.to_json(), indent=2) + "\n")
 
 
-def motion_facts(motion) -> dict:
+def motion_facts(motion: GroundMotion) -> dict:
     """Name, PGA (g), PGV (m/s), PGD (m), time scale and duration (s) of a processed motion."""
     return {
         "name": motion.name,
@@ -151,7 +151,7 @@ def _given(**values) -> dict:
     return {key: value for key, value in values.items() if value is not None}
 
 
-def prepare_motion(profile: Profile, options: StudyOptions | None = None):
+def prepare_motion(profile: Profile, options: StudyOptions | None = None) -> GroundMotion:
     """The processed table motion of ``profile`` (with ``options`` folded in), checked against the table."""
     if options is not None:
         profile = resolve_profile(profile, options)

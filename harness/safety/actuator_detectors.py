@@ -75,7 +75,10 @@ class ActuatorStatusStale(Detector):
 
     def detail(self, health: TickHealth) -> str:
         """Age and limit."""
-        return f"actuator status age {health.actuator_status_age_s * 1e3:.3f} ms, expected 0 <= age <= {self.max_age_s * 1e3:.3f} ms"
+        return (
+            f"actuator status age {health.actuator_status_age_s * 1e3:.3f} ms, "
+            f"expected 0 <= age <= {self.max_age_s * 1e3:.3f} ms"
+        )
 
     def present(self, health: TickHealth) -> str:
         """Still stale?"""

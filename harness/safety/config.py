@@ -130,7 +130,7 @@ TRIP_CLASS_OF: dict[str, str] = {
     "estop": "operator", "estop_lost": "operator", "operator_stop": "operator", "operator_trip": "operator",
     "tick_exception": "internal", "controller_output": "internal",
 }
-_DISABLE_ONLY = ("disable",)
+_DISABLE_ONLY: tuple[TripActionName, ...] = ("disable",)
 
 
 def _actions(doc: str) -> tuple[TripActionName, ...]:

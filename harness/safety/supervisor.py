@@ -198,7 +198,7 @@ class Supervisor:
 
     def act_counts(self) -> dict[str, int]:
         """Ticks each check acted on, by name (non-zero only; allocates: for reports, not per tick)."""
-        return {name: n for name, n in zip(CHECK_NAMES, self.act_ticks) if n}
+        return {name: n for name, n in zip(CHECK_NAMES, self.act_ticks, strict=True) if n}
 
     def _state_event(self, t: float, before: State, why: str) -> None:
         after = self.lifecycle.state

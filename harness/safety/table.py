@@ -8,7 +8,7 @@ Actions are the defaults; ``bus_error_frames``, ``bus_error_passive`` and
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 from harness.safety.actuator_detectors import (
     ActuatorStatusStale,
@@ -60,7 +60,17 @@ class SafetyRecord(NamedTuple):
     reset: str
 
 
-_CLASSES = (
+class _DocumentedCheck(Protocol):
+    """What a check class says about itself (class attributes of every detector and interlock)."""
+
+    NAME: str
+    ACTION: Action
+    DETECTS: str
+    BOUND: str
+    RESET: str
+
+
+_CLASSES: tuple[type[_DocumentedCheck], ...] = (
     ForceClamp, ForceRateLimit, StrokeSoftFade, StrokeHardLimit, StrokePredictiveLimit,
     SensorInvalid, SensorStale, SensorJump, SensorStuck, SensorDisagree, SensorSignFlip,
     E2eRejects, BusErrorFrames, BusErrorPassive, BusOff, BusSendFailures, BusGone, ForeignCommand,
@@ -79,7 +89,7 @@ _INLINE = (
 )
 
 
-def _record(cls: type) -> SafetyRecord:
+def _record(cls: type[_DocumentedCheck]) -> SafetyRecord:
     action = Action(cls.ACTION).name.lower()
     return SafetyRecord(cls.NAME, cls.DETECTS, cls.BOUND, action, cls.RESET)
 

@@ -122,6 +122,7 @@ def _control_step(
     def control(k: int, t: float) -> float:
         plant.measure(t, meas, table_x[k], table_v[k])
         if use_estimator:
+            assert estimator is not None, "friction_source 'estimator' needs an estimator"
             friction = estimator.update(t, period, meas.sliding_velocity_m_s)
         else:
             friction = plant.friction_force(t, table_v[k])

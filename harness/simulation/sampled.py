@@ -17,7 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
-from harness.peaks import peak_responses
+from harness.peaks import Peaks, peak_responses
 
 #: How many progress reports a case makes (about every 5 %).
 _PROGRESS_REPORTS = 20
@@ -29,7 +29,7 @@ class CaseResult:
 
     name: str
     columns: dict[str, np.ndarray]
-    peaks: dict
+    peaks: Peaks
     integrator_steps: int
     wall_time_s: float
     extra: dict = field(default_factory=dict)

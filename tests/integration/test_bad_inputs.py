@@ -23,9 +23,13 @@ BAD_RECORDS = {
     "binary.csv": (bytes(range(256)) * 8, ""),
     "header_only.csv": (GOOD_HEADER.encode(), ""),
     "no_unit.csv": (b"t,acc\n" + b"".join(f"{i * 0.01:.2f},0.01\n".encode() for i in range(50)), "unit"),
-    "text_value.csv": ((GOOD_HEADER + "".join(f"{i * 0.01:.2f},{'abc' if i == 7 else '0.01'}\n" for i in range(50))).encode(), ".csv:9:"),
+    "text_value.csv": (
+        (GOOD_HEADER + "".join(f"{i * 0.01:.2f},{'abc' if i == 7 else '0.01'}\n" for i in range(50))).encode(), ".csv:9:"
+    ),
     "nan_value.csv": ((GOOD_HEADER + "".join(f"{i * 0.01:.2f},{'nan' if i == 9 else '0.01'}\n" for i in range(50))).encode(), ""),
-    "non_uniform.csv": ((GOOD_HEADER + "".join(f"{i * 0.01 + (0.004 if i == 20 else 0):.3f},0.01\n" for i in range(50))).encode(), ""),
+    "non_uniform.csv": (
+        (GOOD_HEADER + "".join(f"{i * 0.01 + (0.004 if i == 20 else 0):.3f},0.01\n" for i in range(50))).encode(), ""
+    ),
     "too_short.csv": ((GOOD_HEADER + "0,0.01\n0.01,0.02\n").encode(), ""),
     "huge_values.csv": ((GOOD_HEADER + "".join(f"{i * 0.01:.2f},1e6\n" for i in range(50))).encode(), ""),
     "one_column.csv": ((GOOD_HEADER + "".join("0.01\n" for _ in range(50))).encode(), ""),
@@ -40,7 +44,8 @@ def test_bad_profile_gives_a_clear_error_and_exit_2(tmp_path, capsys, case, comm
     content, pattern = BAD_PROFILES[case]
     path = tmp_path / f"{case}.yaml"
     path.write_bytes(content if isinstance(content, bytes) else content.encode())
-    status = main([command, str(path), "--duration", "1", "--quiet", *(["--log-dir", str(tmp_path)] if command == "dry-run" else [])])
+    log_dir = ["--log-dir", str(tmp_path)] if command == "dry-run" else []
+    status = main([command, str(path), "--duration", "1", "--quiet", *log_dir])
     err = capsys.readouterr().err
     assert status == exit_codes.INPUT_ERROR
     assert err.startswith("error:") and path.name in err
@@ -141,7 +146,9 @@ BAD_ARGUMENTS = {
     "missing_dbc": (["dry-run", "--set", "can.dbc_path={tmp}/missing.dbc"], ["missing.dbc", "not found"]),
     "empty_record_name": (["simulate", "--record", ""], ["--record", "found an empty value"]),
     "empty_controller": (["dry-run", "--controller", " "], ["--controller", "found an empty value"]),
-    "synthetic_seed_too_large": (["simulate", "--record", "synthetic:99999999999999999999"], ["expected a seed in [0, 4294967295]"]),
+    "synthetic_seed_too_large": (
+        ["simulate", "--record", "synthetic:99999999999999999999"], ["expected a seed in [0, 4294967295]"]
+    ),
     "zero_parent_pid": (["rig", "--parent-pid", "0"], ["--parent-pid", "found 0", "expected a whole number in [1, 4.1943e+06]"]),
     "weaker_safety_without_the_flag": (
         ["dry-run", "--set", "safety.comms.error_frame_action=indicate"],

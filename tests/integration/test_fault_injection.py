@@ -19,6 +19,8 @@ VISIBLE_AFTER_S = 2 * PERIOD_S  # onset at the rig -> first affected frame seen 
 SAFETY = load_profile().safety
 
 # fault spec -> (the trip reason, detection bound after onset in s); lockstep makes each deterministic
+#: The E2E faults trip once more frames than ``max_e2e_rejects`` were refused, one a period.
+E2E_BOUND_S = (SAFETY.comms.max_e2e_rejects + 1) * PERIOD_S
 FAULTS = {
     "table_dropout": ("{kind: dropout, target: TABLE_SENSORS}", "sensor_stale", SAFETY.sensors.max_sensor_age_s),
     "base_dropout": ("{kind: dropout, target: BASE_SENSORS}", "sensor_stale", SAFETY.sensors.max_sensor_age_s),
@@ -26,7 +28,8 @@ FAULTS = {
     # frozen values while the table moves: the frozen velocity disagrees with the (now flat)
     # displacement before stuck_samples repeats (a stuck channel at rest: the test below)
     "table_stuck": ("{kind: stuck, target: TABLE_SENSORS}", "sensor_disagree",
-                    max(SAFETY.sensors.stuck_samples * PERIOD_S, SAFETY.sensors.disagree_time_s + 2 * SAFETY.sensors.disagree_filter_s)),
+                    max(SAFETY.sensors.stuck_samples * PERIOD_S,
+                        SAFETY.sensors.disagree_time_s + 2 * SAFETY.sensors.disagree_filter_s)),
     # a negated velocity (polarity fault): the filtered velocity crosses -floor within
     # tau * ln(2 v / (v - floor)) <= tau * ln 4 for v >= 2 floor, then the signs must disagree for sign_flip_time_s
     "base_sign_flip": ("{kind: sign_flip, target: BASE_SENSORS, param: 1}", "sensor_sign_flip",
@@ -35,9 +38,9 @@ FAULTS = {
                         SAFETY.sensors.disagree_filter_s * math.log(4) + SAFETY.sensors.sign_flip_time_s),
     "table_spike": ("{kind: spike, target: TABLE_SENSORS, param: 0.02}", "sensor_jump", PERIOD_S),
     "base_noise_burst": ("{kind: noise_burst, target: BASE_SENSORS, param: 0.05}", "sensor_jump", PERIOD_S),
-    "table_bad_crc": ("{kind: corrupt_crc, target: TABLE_SENSORS}", "e2e_rejects", (SAFETY.comms.max_e2e_rejects + 1) * PERIOD_S),
-    "base_repeated_counter": ("{kind: repeat_counter, target: BASE_SENSORS}", "e2e_rejects", (SAFETY.comms.max_e2e_rejects + 1) * PERIOD_S),
-    "table_skipped_counter": ("{kind: skip_counter, target: TABLE_SENSORS}", "e2e_rejects", (SAFETY.comms.max_e2e_rejects + 1) * PERIOD_S),
+    "table_bad_crc": ("{kind: corrupt_crc, target: TABLE_SENSORS}", "e2e_rejects", E2E_BOUND_S),
+    "base_repeated_counter": ("{kind: repeat_counter, target: BASE_SENSORS}", "e2e_rejects", E2E_BOUND_S),
+    "table_skipped_counter": ("{kind: skip_counter, target: TABLE_SENSORS}", "e2e_rejects", E2E_BOUND_S),
     "drive_fault": ("{kind: drive_fault, param: 4}", "drive_fault", 2 * 0.004),
     # the servo faults its drive on pressure loss in the same status frame; drive_fault is checked
     # first (hydraulic_pressure alone: tests/unit/test_detectors.py)
@@ -73,7 +76,9 @@ def test_injected_fault_trips_with_its_reason_within_its_bound(tmp_path, capsys,
     latency = float(trip["t_s"]) - _onset_time(run)
     # the fault acts on the rig's frames: they reach the loop one step later, after the sensor's 1 ms
     # delay (a whole step in lockstep): two periods between the rig's onset and what the harness can see
-    assert 0.0 <= latency <= bound_s + VISIBLE_AFTER_S + 1e-9, f"{case}: detected after {latency * 1e3:.1f} ms, bound {bound_s * 1e3:.1f} ms"
+    assert 0.0 <= latency <= bound_s + VISIBLE_AFTER_S + 1e-9, (
+        f"{case}: detected after {latency * 1e3:.1f} ms, bound {bound_s * 1e3:.1f} ms"
+    )
     assert run["force_command_N"][-1] == 0.0 and run["drive_enabled"][-1] == 0.0
 
 

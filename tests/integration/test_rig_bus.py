@@ -372,7 +372,8 @@ def test_drive_fault_pressure_loss_and_rig_estop(bench):
     b.step(n=2)
     assert b.reader.drive_state == DriveState.ENABLED, "reset and fault clear bring the drive back"
     b.control(fault_id=fault_id_for("pressure_lost"))
-    assert not b.reader.pressure_ok and b.reader.drive_state == DriveState.FAULT and b.reader.fault_code == FaultCode.PRESSURE_LOST
+    assert not b.reader.pressure_ok
+    assert b.reader.drive_state == DriveState.FAULT and b.reader.fault_code == FaultCode.PRESSURE_LOST
     b.control(fault_id=fault_id_for("estop"))
     assert b.reader.estop_requested and b.reader.drive_state == DriveState.ESTOP
 

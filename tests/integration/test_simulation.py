@@ -54,7 +54,9 @@ def test_rig_matches_reference_synthetic(controller):
     _compare(profile, _motion(profile, "synthetic", 4.0), controller, 4.0, friction="estimator")
 
 
-@pytest.mark.parametrize("profile_name, controller", [("eight_story.yaml", None), ("eight_story.yaml", "FSF-II"), ("nceer_4dof.yaml", "phi")])
+@pytest.mark.parametrize(
+    "profile_name, controller", [("eight_story.yaml", None), ("eight_story.yaml", "FSF-II"), ("nceer_4dof.yaml", "phi")]
+)
 def test_el_centro_matches_reference(records_dir, profile_name, controller):
     profile = load_profile(PROFILES / profile_name)
     table = _motion(profile, "el_centro", 8.0, records_dir)

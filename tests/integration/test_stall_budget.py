@@ -11,6 +11,7 @@ What reaches the bus is taken from the writer's calls (the frames that were sent
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import re
 import uuid
 
@@ -133,7 +134,7 @@ def test_a_stall_inside_the_budget_is_ridden_through_with_no_force_step_beyond_t
     max_step = profile.safety.force.max_force_rate_N_per_s * PERIOD_S
     assert abs(first_after - last_before) <= max_step * (1 + 1e-9)
     assert abs(first_after - last_before) == pytest.approx(max_step, rel=1e-6)  # the step demand was limited, not passed
-    steps = [abs(b[0] - a[0]) for a, b in zip(after, after[1:]) if a[1] and b[1]]
+    steps = [abs(b[0] - a[0]) for a, b in itertools.pairwise(after) if a[1] and b[1]]
     assert max(steps) <= max_step * (1 + 1e-9)
 
 

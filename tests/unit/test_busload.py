@@ -98,7 +98,8 @@ def test_rates_and_dbc_must_agree() -> None:
 
 
 def test_config_from_yaml_mapping_with_units() -> None:
-    config = build(CanConfig, {"sensor_rate_hz": "1 kHz", "bitrate_bps": 500_000, "max_bus_load": 0.6}, source="p.yaml", path="can")
+    data = {"sensor_rate_hz": "1 kHz", "bitrate_bps": 500_000, "max_bus_load": 0.6}
+    config = build(CanConfig, data, source="p.yaml", path="can")
     assert config.sensor_rate_hz == 1000.0
     assert config.rates_hz()["BASE_SENSORS"] == 1000.0
     with pytest.raises(ProfileError, match="can.max_bus_load"):

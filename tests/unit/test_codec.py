@@ -86,9 +86,9 @@ def test_encoding_agrees_with_cantools(name: str, data: st.DataObject) -> None:
     message = PROTOCOL.database.get_message_by_name(name)
     decoded = message.decode(bytes(ours), decode_choices=False, scaling=True)
     assert decoded["counter"] == counter
-    for sig, value in zip(codec.signals, values):
+    for sig, value in zip(codec.signals, values, strict=True):
         assert decoded[sig.name] == pytest.approx(value, rel=1e-9, abs=1e-12)
-    theirs = bytearray(message.encode({"crc": 0, "counter": counter, **dict(zip(codec.signal_names, values))}))
+    theirs = bytearray(message.encode({"crc": 0, "counter": counter, **dict(zip(codec.signal_names, values, strict=True))}))
     protect(theirs, counter, codec.data_ids)
     assert theirs == ours
 
@@ -267,7 +267,11 @@ def test_bad_dbc_files_are_refused(tmp_path: Path) -> None:
     with pytest.raises(ProtocolError, match="ESTOP has no E2EDataIDs"):
         load_protocol(_edited_dbc(tmp_path, 'BA_ "E2EDataIDs" BO_ 16 "16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31";', ""))
     with pytest.raises(ProtocolError, match="expected signal 'counter' at bit 8"):
-        load_protocol(_edited_dbc(tmp_path, "SG_ counter : 8|4@1+ (1,0) [0|15] \"\" HARNESS,RIG,SERVO", "SG_ counter : 9|3@1+ (1,0) [0|7] \"\" HARNESS,RIG,SERVO"))
+        load_protocol(_edited_dbc(
+            tmp_path,
+            'SG_ counter : 8|4@1+ (1,0) [0|15] "" HARNESS,RIG,SERVO',
+            'SG_ counter : 9|3@1+ (1,0) [0|7] "" HARNESS,RIG,SERVO',
+        ))
     bumped = load_protocol(_edited_dbc(tmp_path, 'BA_ "ProtocolVersion" 1;', 'BA_ "ProtocolVersion" 7;'))
     assert bumped.version == 7
 

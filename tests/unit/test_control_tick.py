@@ -77,8 +77,9 @@ class Bench:
             w.base(self.x_b + noise_m, self.v_b + 10.0 * noise_m, 0.0, self.t)  # 1 LSB of ydot_b
         if self.publish_panel:
             w.estop(False, self.t, source=EstopSource.PANEL)
-        w.actuator_status(self.supervisor.command.force_N, DriveState.ENABLED if self.supervisor.command.enable else DriveState.READY,
-                          True, FaultCode.NONE, self.t)
+        command = self.supervisor.command
+        drive_state = DriveState.ENABLED if command.enable else DriveState.READY
+        w.actuator_status(command.force_N, drive_state, True, FaultCode.NONE, self.t)
 
     def step(self):
         """Publish, run one tick, and return the ACTUATOR_CMD (enable, force_N) the rig received for it."""

@@ -101,15 +101,20 @@ BAD_PROFILES = {
     # A second section used to replace the first silently (the stroke limits fell back to code defaults).
     "duplicate_section": (
         _rig_text() + "\nsafety:\n  force:\n    max_force_N: 5000\n",
-        rf"duplicate key 'safety' at line \d+, column 1 \(first at line {_rig_text().splitlines().index('safety:') + 1}, column 1\)",
+        rf"duplicate key 'safety' at line \d+, column 1 "
+        rf"\(first at line {_rig_text().splitlines().index('safety:') + 1}, column 1\)",
     ),
     "duplicate_nested_key": (
         _rig_text().replace("  mu_max: 0.06\n", "  mu_max: 0.06\n  mu_max: 0.07\n"),
         rf"duplicate key 'mu_max' at line {_rig_text().splitlines().index('  mu_max: 0.06') + 2}, column 3 "
         rf"\(first at line {_rig_text().splitlines().index('  mu_max: 0.06') + 1}, column 3\)",
     ),
-    "rate_above_bound": (_rig_text().replace("  rate_hz: 500\n", "  rate_hz: 20000\n", 1), r"rate_hz: found 20000, expected .*<= 5000 Hz"),
-    "time_scale_too_large": (_rig_text().replace("time_scale: 2.0", "time_scale: 1e9"), r"time_scale: found 1e\+09, expected .*<= 10"),
+    "rate_above_bound": (
+        _rig_text().replace("  rate_hz: 500\n", "  rate_hz: 20000\n", 1), r"rate_hz: found 20000, expected .*<= 5000 Hz"
+    ),
+    "time_scale_too_large": (
+        _rig_text().replace("time_scale: 2.0", "time_scale: 1e9"), r"time_scale: found 1e\+09, expected .*<= 10"
+    ),
 }
 
 

@@ -27,7 +27,8 @@ CHILD = textwrap.dedent(
     run.record_event(0.0, "lifecycle", "started")
     for i in range(N_ROWS):
         run.record_row((i * 0.001, i * 1e-4, -2.5 * i))
-        run.record_frame(can.Message(timestamp=100.0 + i * 0.001, arbitration_id=0x101, data=bytes([i % 256]), is_extended_id=False))
+        frame = can.Message(timestamp=100.0 + i * 0.001, arbitration_id=0x101, data=bytes([i % 256]), is_extended_id=False)
+        run.record_frame(frame)
     deadline = time.monotonic() + 20.0
     while run.rows_written < N_ROWS and time.monotonic() < deadline:
         time.sleep(0.005)

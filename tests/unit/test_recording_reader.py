@@ -59,7 +59,9 @@ def _edit_metadata(folder: Path, **changes: object) -> None:
 
 
 def test_simulation_cases_are_two_complete_run_folders(tmp_path: Path) -> None:
-    passive = write_simulation_case(tmp_path / "sim", "passive", COLUMNS, _arrays(), {"controller": "passive", "total_weight_N": 1e4})
+    passive = write_simulation_case(
+        tmp_path / "sim", "passive", COLUMNS, _arrays(), {"controller": "passive", "total_weight_N": 1e4}
+    )
     controlled = write_simulation_case(tmp_path / "sim", "controlled", COLUMNS, _arrays(amplitude=0.004), {"controller": "eq23"})
     assert passive == tmp_path / "sim" / "passive"
     runs = load_runs([tmp_path / "sim"])
@@ -178,7 +180,8 @@ def test_canonical_columns_and_units() -> None:
     assert drift(3) in names and floor_acceleration(1) in names and "drift_4_m" not in names
     assert count_stories(names) == 3
     assert "lateness_s" not in canonical_columns(1, timing=False)
-    assert [unit_of(n) for n in ("floor_acceleration_2_m_s2", "sliding_velocity_m_s", "drift_1_m", "force_raw_N", "t_s", "state")] == [
+    some = ("floor_acceleration_2_m_s2", "sliding_velocity_m_s", "drift_1_m", "force_raw_N", "t_s", "state")
+    assert [unit_of(n) for n in some] == [
         "m/s^2",
         "m/s",
         "m",

@@ -74,7 +74,9 @@ def _frames() -> list[can.Message]:
         can.Message(timestamp=1.5, arbitration_id=0x123, data=b"\x01\x02", is_extended_id=False, is_rx=True, channel="vcan0"),
         can.Message(timestamp=1.6, arbitration_id=0x1ABCDE, data=bytes(range(8)), is_extended_id=True, is_rx=False, channel=1),
         can.Message(timestamp=1.7, arbitration_id=0x7FF, is_remote_frame=True, dlc=0, is_extended_id=False, is_rx=True),
-        can.Message(timestamp=1.8, arbitration_id=0x10, data=bytes(range(64)), is_fd=True, bitrate_switch=True, is_extended_id=False),
+        can.Message(
+            timestamp=1.8, arbitration_id=0x10, data=bytes(range(64)), is_fd=True, bitrate_switch=True, is_extended_id=False
+        ),
     ]
 
 
@@ -84,7 +86,7 @@ def test_frame_ring_keeps_every_field() -> None:
         assert ring.push(msg)
     out = ring.drain()
     assert len(out) == 4
-    for sent, got in zip(_frames(), out):
+    for sent, got in zip(_frames(), out, strict=True):
         assert got.equals(sent, timestamp_delta=0.0)
         assert got.is_rx == sent.is_rx
         assert got.channel == sent.channel

@@ -45,7 +45,9 @@ def folder(tmp_path: Path):
 def test_folder_is_named_by_start_time_profile_and_kind(folder: RunFolder, tmp_path: Path) -> None:
     assert folder.path.parent == tmp_path
     assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d-\d\d-\d\d_nceer_4dof_dry-run", folder.path.name)
-    assert sorted(p.name for p in folder.path.iterdir()) == ["can.log", "events.jsonl", "metadata.json", "profile.yaml", "signals.csv"]
+    assert sorted(p.name for p in folder.path.iterdir()) == [
+        "can.log", "events.jsonl", "metadata.json", "profile.yaml", "signals.csv",
+    ]
 
 
 def test_two_runs_started_in_the_same_second_get_distinct_folders(tmp_path: Path) -> None:
@@ -142,7 +144,7 @@ def test_can_log_replays_through_log_reader_with_identical_frames(folder: RunFol
     with can.LogReader(run.can_log) as reader:
         replayed = list(reader)
     assert len(replayed) == len(sent)
-    for original, back in zip(sent, replayed):
+    for original, back in zip(sent, replayed, strict=True):
         assert back.arbitration_id == original.arbitration_id
         assert back.data == original.data
         assert back.is_extended_id == original.is_extended_id
@@ -278,7 +280,10 @@ def test_can_player_replays_the_log(folder: RunFolder) -> None:
         folder.record_frame(msg)
     folder.finish("completed")
     done = subprocess.run(
-        [sys.executable, "-m", "can.player", "-i", "virtual", "-c", "replay-test", "--ignore-timestamps", str(folder.path / "can.log")],
+        [
+            sys.executable, "-m", "can.player", "-i", "virtual", "-c", "replay-test", "--ignore-timestamps",
+            str(folder.path / "can.log"),
+        ],
         capture_output=True,
         text=True,
         timeout=60,

@@ -125,7 +125,8 @@ def test_the_protocol_limit_is_read_from_the_dbc(tmp_path):
     text = (REPO / "drivers" / "rig.dbc").read_text()
     dbc.write_text(text.replace('SG_ force : 16|16@1- (1,0) [-30000|30000] "N"', 'SG_ force : 16|16@1- (1,0) [-20000|20000] "N"'))
     overrides = [f"can.dbc_path={dbc}", "rig.actuator.force_limit_N=30000", "safety.force.max_force_N=25000"]
-    with pytest.raises(ProfileError, match=r"expected at most 20000 N \(the range of the ACTUATOR_CMD force signal of .*narrow.dbc"):
+    expected = r"expected at most 20000 N \(the range of the ACTUATOR_CMD force signal of .*narrow.dbc"
+    with pytest.raises(ProfileError, match=expected):
         load_profile(RIG, overrides=overrides)
 
 

@@ -63,7 +63,9 @@ def make_frames(count: int, seed: int) -> list[can.Message]:
         elif kind == 2:  # remote frame: a DLC, no data
             msg = can.Message(arbitration_id=(k + seed) & 0x7FF, is_extended_id=False, is_remote_frame=True, dlc=k % 9)
         elif kind == 3:  # error frame: bus-off + controller error-passive
-            msg = can.Message(arbitration_id=0x044, is_extended_id=False, is_error_frame=True, data=bytes([0, 0x10, k & 0xFF, 0, 0, 0, 0, 0]))
+            msg = can.Message(
+                arbitration_id=0x044, is_extended_id=False, is_error_frame=True, data=bytes([0, 0x10, k & 0xFF, 0, 0, 0, 0, 0])
+            )
         elif kind == 4:  # FD, extended, bit-rate switch and ESI
             msg = can.Message(
                 arbitration_id=(k * 977 + seed) & 0x1FFFFFFF, is_extended_id=True, is_fd=True,
@@ -221,7 +223,9 @@ def test_plain_names_are_abstract_addresses(name: str) -> None:
     assert addr.address == "\0shaketable-can/harness" and addr.path is None and addr.name == name
 
 
-def test_abstract_channel_leaves_no_file(buses: list[SeqPacketBus], channel: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_abstract_channel_leaves_no_file(
+    buses: list[SeqPacketBus], channel: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.chdir(tmp_path)
     hub = open_(buses, channel)
     assert hub.is_hub and list(tmp_path.iterdir()) == []
@@ -352,7 +356,9 @@ class _NoPoll:
 
 
 @pytest.mark.parametrize("role", ["node", "hub"])
-def test_recv_timeout_zero_is_a_plain_nonblocking_recv(buses: list[SeqPacketBus], channel: str, role: str, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_recv_timeout_zero_is_a_plain_nonblocking_recv(
+    buses: list[SeqPacketBus], channel: str, role: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     hub, node = open_(buses, channel), open_(buses, channel)
     hub.send(can.Message(arbitration_id=1, data=b""))  # the hub accepts the node here
     bus = node if role == "node" else hub
@@ -520,7 +526,9 @@ def test_shutdown_is_idempotent_and_later_calls_raise(buses: list[SeqPacketBus],
 
 
 @pytest.mark.parametrize("child_is_hub", [True, False], ids=["child-hub", "parent-hub"])
-def test_two_processes_exchange_frames_both_ways(buses: list[SeqPacketBus], children: list[Child], channel: str, child_is_hub: bool) -> None:
+def test_two_processes_exchange_frames_both_ways(
+    buses: list[SeqPacketBus], children: list[Child], channel: str, child_is_hub: bool
+) -> None:
     count = 300
     if not child_is_hub:
         bus = open_(buses, channel)
@@ -600,7 +608,9 @@ def test_hub_process_goes_away_and_comes_back(buses: list[SeqPacketBus], childre
     assert [r[:9] for r in report["received"]] == [fields(m) for m in mine]  # the dropped 20 never arrive
 
 
-def test_idle_peer_rejoins_a_restarted_hub_without_losing_the_next_frame(buses: list[SeqPacketBus], children: list[Child], channel: str) -> None:
+def test_idle_peer_rejoins_a_restarted_hub_without_losing_the_next_frame(
+    buses: list[SeqPacketBus], children: list[Child], channel: str
+) -> None:
     first = Child("child_relay", channel)
     children.append(first)
     assert first.expect()["hub"] is True

@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -53,7 +54,7 @@ def test_the_stopping_ramp_never_grows_the_force_faster_than_the_rate_limit():
     assert _tick(sup, health, dt, dt, 0.0).force_N == 0.0
     sup.stop(dt, "test")  # STOPPING with the force at zero ...
     forces = [_tick(sup, health, dt * k, dt, 9_000.0).force_N for k in range(2, 40)]  # ... and a large demand
-    steps = [abs(b - a) for a, b in zip([0.0, *forces], forces)]
+    steps = [abs(b - a) for a, b in itertools.pairwise([0.0, *forces])]
     assert max(steps) <= RATE_N_PER_S * dt * (1 + 1e-9)
 
 
