@@ -1,4 +1,5 @@
-"""The live console of a run (rich): state, progress, stroke against its limits, force, S, loop health.
+"""The live console of a run (rich): state, progress, stroke and force against their limits, S, story drifts
+and floor accelerations, loop health, and the last few events.
 
 The loop writes a :class:`~harness.loop.status.LoopStatus` (shared memory) every tick. On a
 terminal, :class:`LiveConsole` draws it from a child process (:mod:`harness.console_view`),
@@ -26,6 +27,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from drivers.protocol_values import FaultCode
 from harness.loop.status import LoopStatus
 
 if TYPE_CHECKING:
@@ -36,6 +38,8 @@ _STATE_STYLE = {"IDLE": "dim", "ARMED": "yellow", "RUNNING": "green", "STOPPING"
 CHILD_EXIT_TIMEOUT_S = 2.0
 #: The child's refresh rate (Hz).
 REFRESH_HZ = 4.0
+#: Width of the stroke and force bars (characters): the panel fits an 80-column terminal.
+BAR_WIDTH = 21
 _PROJECT_ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -51,6 +55,49 @@ def stroke_bar(stroke_m: float, soft_m: float, hard_m: float, width: int = 41) -
         char = "█" if i == position else ("|" if offset == soft_cells else "─")
         text.append(char, style="bold white" if i == position else style)
     return text
+
+
+def fault_name(code: int) -> str:
+    """The servo's fault code as a name: ``HEARTBEAT_WATCHDOG (2)``, or ``code 77`` for one the protocol does not name."""
+    try:
+        return f"{FaultCode(code).name} ({code})"
+    except ValueError:
+        return f"code {code} (not a FaultCode)"
+
+
+def _state_text(status: LoopStatus) -> Text:
+    state_name = status.state
+    state = Text(state_name, style=_STATE_STYLE.get(state_name, ""))
+    trip_reason = status.trip_reason
+    if trip_reason:
+        state.append(f"  ({trip_reason})", style="red")
+    fault_code = status.fault_code
+    if fault_code:
+        state.append(f"  drive fault: {fault_name(fault_code)}", style="bold red")
+    return state
+
+
+def _bar_row(value: float, soft: float, hard: float, text: str, limits: str) -> Text:
+    row = Text(text + "  ")
+    row.append_text(stroke_bar(value, soft, hard, BAR_WIDTH))
+    row.append(f"  {limits}")
+    return row
+
+
+def _story_rows(status: LoopStatus) -> list[tuple[str, str]]:
+    """The ``drift mm`` and ``floor acc. m/s²`` rows, top story first; none before any story is published."""
+    stories = status.stories()
+    if not stories:
+        return []
+    top_down = list(enumerate(stories, start=1))[::-1]
+    drifts = "  ".join(f"s{j} {drift * 1e3:+7.3f}" for j, (drift, _) in top_down)
+    accelerations = "  ".join(f"f{j} {accel:+7.3f}" for j, (_, accel) in top_down)
+    return [("drift mm", drifts), ("floor acc. m/s²", accelerations)]
+
+
+def _events_text(status: LoopStatus) -> Text:
+    lines = [line.strip() for line in status.recent_events()] or [status.last_event.strip() or "-"]
+    return Text("\n".join(lines), overflow="ellipsis", no_wrap=True)
 
 
 def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, force_limit_N: float, title: str,
@@ -71,34 +118,27 @@ def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, f
     """
     s = status
     grid = Table.grid(padding=(0, 2))
-    grid.add_column(style="bold")
+    grid.add_column(style="bold", no_wrap=True)
     grid.add_column()
     for alert in alerts:
         grid.add_row(Text("WARNING", style="bold red"), Text(alert, style="bold red"))
-    state_name = s.state
-    state = Text(state_name, style=_STATE_STYLE.get(state_name, ""))
-    trip_reason = s.trip_reason
-    if trip_reason:
-        state.append(f"  ({trip_reason})", style="red")
-    grid.add_row("state", state)
+    grid.add_row("state", _state_text(s))
     run_t_s, duration_s = s.run_t_s, s.duration_s
     done = 0.0 if duration_s <= 0 else min(1.0, run_t_s / duration_s)
     grid.add_row("record", f"{run_t_s:6.1f} / {duration_s:.1f} s  ({done * 100:5.1f} %)")
-    stroke_m = s.stroke_m
-    stroke = stroke_bar(stroke_m, soft_limit_m, hard_limit_m)
-    stroke.append(f"  {stroke_m * 1e3:+7.2f} mm (soft {soft_limit_m * 1e3:.0f}, hard {hard_limit_m * 1e3:.0f})")
-    grid.add_row("stroke x_b", stroke)
-    force_N = s.force_N
-    force = stroke_bar(force_N, force_limit_N, force_limit_N)
-    force.append(f"  {force_N / 1e3:+7.3f} kN (limit {force_limit_N / 1e3:.1f})")
-    grid.add_row("force", force)
+    grid.add_row("stroke x_b", _bar_row(s.stroke_m, soft_limit_m, hard_limit_m, f"{s.stroke_m * 1e3:+7.2f} mm",
+                                        f"±{soft_limit_m * 1e3:.0f} soft, ±{hard_limit_m * 1e3:.0f} hard"))
+    grid.add_row("force", _bar_row(s.force_N, force_limit_N, force_limit_N, f"{s.force_N / 1e3:+7.3f} kN",
+                                   f"±{force_limit_N / 1e3:.1f} kN limit"))
     grid.add_row("sliding var. S", f"{s.sliding_variable * 1e3:+8.3f} mm/s")
+    for name, values in _story_rows(s):
+        grid.add_row(name, values)
     p50, p99 = s.lateness_percentiles()
     grid.add_row("loop lateness", f"p50 {p50 * 1e6:7.1f} us   p99 {p99 * 1e6:7.1f} us   overruns {s.overruns}")
     grid.add_row("loop stalls", f"stalls ridden through {s.stalls}, longest {s.longest_stall_s * 1e3:.1f} ms, "
                                 f"missed periods {s.missed_periods}")
     grid.add_row("frame errors", f"E2E rejects {s.e2e_rejects}   error frames {s.error_frames}   send failures {s.send_failures}")
-    grid.add_row("last event", Text(s.last_event or "-", overflow="ellipsis", no_wrap=True))
+    grid.add_row("events", _events_text(s))
     return Panel(grid, title=title, subtitle="Ctrl-C: safe stop   Ctrl-C twice: trip")
 
 
@@ -253,7 +293,7 @@ class LiveConsole:
         fd = _output_fd(self.console) if not self.console_given else _terminal_fd(self.console)
         return fd is not None
 
-    def __enter__(self) -> "LiveConsole":
+    def __enter__(self) -> LiveConsole:
         if not self.enabled:
             return self
         if self.wants_child():
@@ -266,6 +306,10 @@ class LiveConsole:
         """Start the drawing child on the console's file descriptor; None (and one line) if it cannot start."""
         console = self.console
         fd = _output_fd(console)
+        if fd is None:
+            console.print("live console unavailable (the console has no file descriptor); the run goes on without it",
+                          markup=False, highlight=False)
+            return None
         command = view_command(
             self.status.path, self.soft, self.hard, self.force_limit, self.title, parent_pid=os.getpid(), fd=fd,
             width=_explicit_width(console, fd), color_system=console.color_system, force_terminal=console.is_terminal,
@@ -295,6 +339,8 @@ class LiveConsole:
     def _stop_child(self) -> None:
         """Wait for the child's last frame; kill it after the timeout; print the panel here if it died early."""
         child, self.child = self.child, None
+        if child is None:
+            return
         try:
             code = child.wait(timeout=CHILD_EXIT_TIMEOUT_S)
         except subprocess.TimeoutExpired:

@@ -12,17 +12,40 @@ from rich.markup import escape
 
 from harness import input_limits as limits
 
-EPILOG = """\
+#: Exit statuses of the commands that move (or would move) a table: run, dry-run, rig.
+EXIT_STATUS = """\
 exit status:
   0  completed            3  tripped safely (force zeroed, drive disabled), or
   1  internal error (bug)     completed but the record was lost (repeat the test)
   2  bad input or refused configuration, before anything moved
   4  stopped early by the operator (safe stop)
+"""
 
+#: Exit statuses of the offline commands (simulate, report, records): nothing moves, nothing trips.
+OFFLINE_EXIT_STATUS = """\
+exit status:
+  0  completed
+  1  internal error (bug)
+  2  bad input or refused configuration (e.g. a record the table cannot follow)
+"""
+
+RECORDS_HELP = """\
 records: a NAME (el_centro, el_centro_classic, hachinohe, pacoima, synthetic,
 synthetic:SEED) is looked up in --records-dir, else $HARNESS_RECORDS_DIR, else the
 profile's record.records_dir; a PATH (.AT2, .csv, .txt) is read directly.
 """
+
+PROFILES_HELP = """\
+profiles: a PATH to a YAML file, or the NAME of a shipped profile (nceer_4dof,
+eight_story), found from any folder (profiles/NAME.yaml also works outside the checkout).
+"""
+
+#: The epilog of run, dry-run, rig and the top-level command.
+EPILOG = f"{EXIT_STATUS}\n{RECORDS_HELP}\n{PROFILES_HELP}"
+#: The epilog of simulate and records: offline exit statuses, records and profiles.
+SIMULATE_EPILOG = f"{OFFLINE_EXIT_STATUS}\n{RECORDS_HELP}\n{PROFILES_HELP}"
+#: The epilog of report: offline exit statuses only.
+OFFLINE_EPILOG = OFFLINE_EXIT_STATUS
 
 
 def wrap(text: str) -> str:
@@ -78,6 +101,46 @@ def non_empty(text: str) -> str:
     return text
 
 
+def shipped_profile(text: str) -> Path | None:
+    """The shipped profile ``text`` names, if it names one and is not an existing file itself.
+
+    ``eight_story``, ``eight_story.yaml`` and ``profiles/eight_story.yaml`` all name
+    ``<package>/profiles/eight_story.yaml`` (:data:`harness.profile.PROFILE_DIR`), so a
+    shipped profile is found by its name from any folder. Any other path is left alone.
+
+    Parameters
+    ----------
+    text : str
+        What the user typed.
+
+    Returns
+    -------
+    Path or None
+        The shipped file, or None (``text`` is an existing file, or names no shipped profile).
+    """
+    from harness.profile import PROFILE_DIR
+
+    given = Path(text).expanduser()
+    if given.is_file() or given.parent.name not in ("", PROFILE_DIR.name) or len(given.parts) > 2:
+        return None
+    for candidate in (PROFILE_DIR / given.name, PROFILE_DIR / f"{given.name}.yaml"):
+        if candidate.suffix in (".yaml", ".yml") and candidate.is_file():
+            return candidate
+    return None
+
+
+def profile_path(text: str) -> str:
+    """An argparse ``type=`` for a profile: a YAML file, or the name of a shipped profile (:func:`shipped_profile`).
+
+    A path that exists is kept as typed; a name of a shipped profile becomes its file; anything
+    else is kept, and loading it then says what was expected and lists the shipped profiles.
+    """
+    if not text.strip():
+        raise argparse.ArgumentTypeError("found an empty value, expected a profile file or the name of a shipped profile")
+    shipped = shipped_profile(text)
+    return str(shipped) if shipped is not None else text
+
+
 def output_file(text: str) -> str:
     """An argparse ``type=`` for a file the command writes: not a directory, in an existing directory."""
     path = Path(text).expanduser()
@@ -104,7 +167,8 @@ def add_record_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("record (overrides the profile's record section)")
     group.add_argument("--record", type=non_empty, metavar="NAME|PATH", help="record name or file (default: the profile's)")
     group.add_argument("--records-dir", type=non_empty, metavar="DIR", help="where named records are found")
-    group.add_argument("--pga", type=number_in(PGA), metavar="G", help=f"scale to this peak table acceleration (g), {PGA.describe()}")
+    group.add_argument("--pga", type=number_in(PGA), metavar="G",
+                       help=f"scale to this peak table acceleration (g), {PGA.describe()}")
     group.add_argument("--time-scale", type=number_in(TIME_SCALE), metavar="F",
                        help=f"compress time by F (2 = twice the frequency), {TIME_SCALE.describe()}")
     group.add_argument("--duration", type=number_in(DURATION), metavar="S", help=f"run length (s), {DURATION.describe()}")
@@ -112,7 +176,8 @@ def add_record_options(parser: argparse.ArgumentParser) -> None:
 
 def add_bus_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("CAN bus (overrides the profile's can section)")
-    group.add_argument("--interface", type=non_empty, metavar="I", help="python-can interface: virtual, socketcan, pcan, kvaser, ...")
+    group.add_argument("--interface", type=non_empty, metavar="I",
+                       help="python-can interface: virtual, socketcan, pcan, kvaser, ...")
     group.add_argument("--channel", type=non_empty, metavar="C", help="channel, e.g. vcan0, can0, PCAN_USBBUS1")
 
 
@@ -125,8 +190,14 @@ def add_overrides(parser: argparse.ArgumentParser, example: str) -> None:
     )
 
 
+def add_profile_argument(parser: argparse.ArgumentParser, default_help: str) -> None:
+    """The optional positional PROFILE: a YAML file or the name of a shipped profile (:func:`profile_path`)."""
+    parser.add_argument("profile", nargs="?", type=profile_path, metavar="PROFILE",
+                        help=f"{default_help}; a file or a shipped profile's name (nceer_4dof, eight_story)")
+
+
 def add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> None:
-    parser.add_argument("profile", nargs="?", help=default_help)
+    add_profile_argument(parser, default_help)
     add_overrides(parser, "safety.stroke.hard_limit_m=0.05")
     parser.add_argument(
         "--allow-weaker-safety", action="store_true",

@@ -1,8 +1,13 @@
-"""``harness simulate``: offline simulation, passive and controlled side by side."""
+"""``harness simulate``: offline simulation, passive and controlled side by side.
+
+Comma-separated lists of records and controllers make a batch: every record with every controller.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
+from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
@@ -10,10 +15,11 @@ from rich.markup import escape
 from harness import exit_codes
 from harness.commands.options import (
     DELAY,
-    EPILOG,
     RATE,
+    SIMULATE_EPILOG,
     STIFFNESS_SCALE,
     add_overrides,
+    add_profile_argument,
     add_record_options,
     non_empty,
     number_in,
@@ -24,6 +30,13 @@ from harness.commands.options import (
 )
 from harness.commands.output import progress_bar
 
+EXAMPLES = """\
+examples:
+  harness simulate eight_story --record el_centro --pga 0.3 --duration 30 --controller FSF-I --json out.json
+  harness simulate eight_story --record el_centro,hachinohe,pacoima --controller FSF-I,OF-I --out study/
+      (a batch: one folder per record and controller, and the summary tables)
+"""
+
 
 def add_parser(sub) -> None:
     parser = sub.add_parser(
@@ -32,18 +45,21 @@ def add_parser(sub) -> None:
         description=wrap(
             "Simulate the profile's building on its bearings under the record, once passive "
             "(bearings only) and once with the controller, faster than real time, and print the "
-            "peak responses with the %% reduction. The controller samples at --rate and holds its "
-            "force until the next sample (SPEC 3)."
+            "peak responses with the % reduction. The controller samples at --rate and holds its "
+            "force until the next sample (SPEC 3). Comma-separated lists in --record and --controller "
+            "run every record with every controller (a batch) and print the peaks per record and the "
+            "mean and largest % reduction per controller; with --out, each combination is written to "
+            "its own folder DIR/<record>_<controller>/ beside the summary tables."
         ),
-        epilog="example:\n  harness simulate profiles/eight_story.yaml --record el_centro --pga 0.3 "
-        "--duration 30 --controller FSF-I --json out.json\n\n" + EPILOG,
+        epilog=EXAMPLES + "\n" + SIMULATE_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("profile", nargs="?", help="profile YAML (default: profiles/nceer_4dof.yaml)")
+    add_profile_argument(parser, "profile YAML (default: profiles/nceer_4dof.yaml)")
     add_overrides(parser, "control.designs.phi.p1_per_s=8.0")
     add_record_options(parser)
     control = parser.add_argument_group("control")
-    control.add_argument("--controller", type=non_empty, metavar="NAME|none", help="a design of the profile, or 'none' (passive only)")
+    control.add_argument("--controller", type=non_empty, metavar="NAME[,NAME...]|none",
+                         help="a design of the profile, a comma-separated list of them (a batch), or 'none' (passive only)")
     control.add_argument("--rate", type=number_in(RATE), metavar="HZ", help=f"controller sample rate (Hz), {RATE.describe()}")
     control.add_argument("--friction", choices=("estimator", "model"), help="friction term: online estimate or the model's")
     control.add_argument("--delay", type=number_in(DELAY), metavar="S",
@@ -61,38 +77,42 @@ def add_parser(sub) -> None:
     output = parser.add_argument_group("output")
     output.add_argument("--json", type=output_file, metavar="PATH", help="write peaks and record facts as JSON (SI units)")
     output.add_argument("--out", type=output_dir, metavar="DIR", help="save both cases' time series as run folders in DIR")
+    output.add_argument("--label", type=non_empty, metavar="TEXT",
+                        help="label of this study in reports (default: made from what differs between the runs compared)")
     output.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run)
 
 
-def run(args: argparse.Namespace, console: Console) -> int:
-    from harness.profile import load_profile
-    from harness.report.tables import reduction_table
-    from harness.runs.simulate import run_study
-
-    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
-    options = study_options(
+def _study_options(args: argparse.Namespace) -> Any:
+    return study_options(
         args, controller=args.controller, rate_hz=args.rate, friction=args.friction, transport_delay_s=args.delay,
         design_stiffness_scale=args.design_stiffness_scale, rig_effects=args.rig_effects,
     )
-    with progress_bar(console, not args.quiet) as progress:
-        tasks: dict[str, int] = {}
 
-        def report(case: str, fraction: float) -> None:
-            if case not in tasks:
-                tasks[case] = progress.add_task(case, total=1.0)
-            progress.update(tasks[case], completed=fraction)
 
-        result = run_study(profile, options, report)
+def run(args: argparse.Namespace, console: Console) -> int:
+    from harness.profile import load_profile
+    from harness.runs.simulate_batch import split_list
+
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
+    records, controllers = split_list(args.record), split_list(args.controller)
+    if len(records) > 1 or len(controllers) > 1:
+        return run_batch_command(args, console, profile, records, controllers)
+    return run_single(args, console, profile)
+
+
+def _print_study(console: Console, result: Any) -> None:
+    """The record's facts, the controller's settings and the peak table of one study."""
+    from harness.report.tables import reduction_table
+
     motion = result.motion
     console.print(
-        f"[bold]{profile.name}[/]  record [bold]{motion.name}[/]: PGA {motion.pga_g:.3f} g, "
+        f"[bold]{result.profile.name}[/]  record [bold]{motion.name}[/]: PGA {motion.pga_g:.3f} g, "
         f"PGV {motion.pgv_m_s:.3f} m/s, PGD {motion.pgd_m * 1e3:.1f} mm, time scale {motion.time_scale:g}, "
         f"{motion.duration_s:.1f} s"
     )
     for note in getattr(motion, "notes", ()):
         console.print(f"  note: {note}")
-    controlled = result.cases.get("controlled")
     settings = result.settings
     title = (
         f"controller {result.controller_name} at {settings.rate_hz:g} Hz, friction from the "
@@ -102,18 +122,69 @@ def run(args: argparse.Namespace, console: Console) -> int:
         title += f", design stiffness x{result.design_stiffness_scale:g}"
     if result.rig_effects:
         title += ", through the rig's sensor, actuator and safety models"
-    twin = result.cases.get("controlled")
-    if twin is not None and twin.extra.get("outcome") == "tripped":
-        console.print(f"[bold red]the controlled case tripped:[/] {escape(twin.extra['trip_reason'])}")
-    console.print(reduction_table(result.cases["passive"].peaks, controlled.peaks if controlled else None, title).to_rich())
+    controlled = result.cases.get("controlled")
+    if controlled is not None and controlled.extra.get("outcome") == "tripped":
+        console.print(f"[bold red]the controlled case tripped:[/] {escape(controlled.extra['trip_reason'])}")
+    peaks = controlled.peaks if controlled is not None else None
+    console.print(reduction_table(result.cases["passive"].peaks, peaks, title).to_rich())
+
+
+def run_single(args: argparse.Namespace, console: Console, profile: Any) -> int:
+    """One record and one controller: the peaks side by side, and the files asked for."""
+    from harness.runs.simulate import run_study
+
+    with progress_bar(console, not args.quiet) as progress:
+        tasks: dict[str, Any] = {}
+
+        def report(case: str, fraction: float) -> None:
+            if case not in tasks:
+                tasks[case] = progress.add_task(case, total=1.0)
+            progress.update(tasks[case], completed=fraction)
+
+        result = run_study(profile, _study_options(args), report)
+    _print_study(console, result)
     cost = sum(case.wall_time_s for case in result.cases.values())
-    console.print(f"simulated {len(result.cases)} x {motion.duration_s:.1f} s in {cost:.2f} s of wall time")
+    console.print(f"simulated {len(result.cases)} x {result.motion.duration_s:.1f} s in {cost:.2f} s of wall time")
     if args.json:
         result.write_json(args.json)
         console.print(f"wrote {args.json}")
     if args.out:
         from harness.runs.simulate_output import write_study_folders
 
-        folder = write_study_folders(result, args.out)
+        folder = write_study_folders(result, args.out, args.label, args.overrides)
         console.print(f"wrote time series to {folder}")
+    return exit_codes.OK
+
+
+def run_batch_command(args: argparse.Namespace, console: Console, profile: Any, records: list, controllers: list) -> int:
+    """Every record with every controller: a line per study, the summary tables, and the files asked for."""
+    from harness.runs.simulate_batch import record_name, run_batch
+
+    if "none" in controllers:
+        console.print("[bold red]error:[/] 'none' cannot be part of a list of controllers (every study has its "
+                      "passive case); expected designs of the profile", highlight=False)
+        return exit_codes.INPUT_ERROR
+
+    with progress_bar(console, not args.quiet) as progress:
+        task = progress.add_task("batch", total=len(records) * len(controllers))
+
+        def done(study: Any, count: int, total: int) -> None:
+            progress.update(task, completed=count)
+            peaks = study.cases.get("controlled", study.cases["passive"]).peaks
+            console.print(f"  {count}/{total}  {record_name(study)} with {study.controller_name}: peak drift "
+                          f"{max(peaks.drift_m, default=0.0) * 1e3:.3f} mm, sliding "
+                          f"{peaks.sliding_displacement_m * 1e3:.1f} mm", highlight=False)
+
+        batch = run_batch(profile, _study_options(args), records, controllers, args.out, args.label, args.overrides, done)
+    for table in batch.tables:
+        console.print()
+        console.print(table.to_text(console.width), highlight=False, markup=False, soft_wrap=True)
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as handle:
+            json.dump({"runs": [study.to_json() for study in batch.studies]}, handle, indent=2)
+            handle.write("\n")
+        console.print(f"wrote {args.json}")
+    if args.out:
+        console.print(f"wrote {len(batch.folders)} case sets and the summary tables (summary_peaks.csv, "
+                      f"summary_reduction.csv, summary.txt) to {args.out}", soft_wrap=True)
     return exit_codes.OK

@@ -10,17 +10,21 @@ The block is a small temporary file (in ``/dev/shm`` where it exists), mapped wi
 ==============  ======================================================================
 bytes           contents
 ==============  ======================================================================
-0 .. 256        32 float64 cells: a magic number, the numeric fields, the state code,
-                the finished flag, the lateness count, and for each text field a
-                sequence number and a length
-256 .. 4352     ring of the most recent 512 lateness values (float64, s)
-4352 .. 4800    UTF-8 text fields: phase (64 bytes), last_event (256), trip_reason (128)
+0 .. 512        64 float64 cells: a magic number, the numeric fields, the state code,
+                the finished flag, the lateness count, for each text slot a sequence
+                number and a length, the event count, and each story's drift (m)
+                and floor acceleration (m/s^2), up to 8 stories
+512 .. 4608     ring of the most recent 512 lateness values (float64, s)
+4608 .. 6016    UTF-8 text slots: phase (64 bytes), last_event (256), trip_reason (128),
+                then a ring of the 6 most recent event lines (160 each)
 ==============  ======================================================================
 
 Writes from the loop allocate nothing: numeric fields go straight into the float64 cells;
 a text field is encoded and copied only when it differs from the last string written
 (one string comparison otherwise). A text field is guarded by a sequence number (odd while
-it is being written) so a reader never shows a half-written string.
+it is being written) so a reader never shows a half-written string. The story values
+(:meth:`LoopStatus.set_story`) are two cell stores per story; an event line
+(:meth:`LoopStatus.add_event`) is encoded when the event happens, which is rare.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import mmap
 import os
 import tempfile
 import weakref
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 import numpy as np
 
@@ -57,26 +62,50 @@ NUMBER_FIELDS = (
     ("stalls", True, "stalls ridden through (two periods or more between two ticks' starts, within budget)"),
     ("longest_stall_s", False, "longest time between the starts of two consecutive ticks in a stall (s)"),
     ("missed_periods", True, "tick periods skipped by the scheduler"),
+    ("fault_code", True, "the servo's fault code in the latest ACTUATOR_STATUS (drivers.protocol_values.FaultCode); 0 none"),
+    ("n_stories", True, "stories whose drift and floor acceleration are published (set_story); 0 none"),
 )
 #: Text fields: (name, capacity in UTF-8 bytes, default).
 TEXT_FIELDS = (("phase", 64, "starting"), ("last_event", 256, ""), ("trip_reason", 128, ""))
+#: Event lines kept for the console's scrolling list, and the UTF-8 bytes kept of each.
+EVENT_LINES = 6
+EVENT_LINE_BYTES = 160
+#: Stories whose drift and floor acceleration the block holds.
+MAX_STORIES = 8
+#: Every text slot: the text fields, then the ring of event lines.
+_TEXT_SLOTS = (*TEXT_FIELDS, *((f"event_{i}", EVENT_LINE_BYTES, "") for i in range(EVENT_LINES)))
+_FIRST_EVENT_SLOT = len(TEXT_FIELDS)
 
-_MAGIC = float(0x53_5441_5401)  # "STAT" v1; exact in a float64 (40 bits)
-_N_CELLS = 32
+_MAGIC = float(0x53_5441_5402)  # "STAT" v2; exact in a float64 (40 bits)
+_N_CELLS = 64
 _CELL_MAGIC = 0
 _CELL_FIRST_NUMBER = 1
 _CELL_STATE = _CELL_FIRST_NUMBER + len(NUMBER_FIELDS)
 _CELL_FINISHED = _CELL_STATE + 1
 _CELL_LATENESS_COUNT = _CELL_FINISHED + 1
-_CELL_FIRST_TEXT = _CELL_LATENESS_COUNT + 1  # then (sequence, length) per text field
-assert _CELL_FIRST_TEXT + 2 * len(TEXT_FIELDS) <= _N_CELLS
+_CELL_FIRST_TEXT = _CELL_LATENESS_COUNT + 1  # then (sequence, length) per text slot
+_CELL_EVENT_COUNT = _CELL_FIRST_TEXT + 2 * len(_TEXT_SLOTS)
+_CELL_FIRST_DRIFT = _CELL_EVENT_COUNT + 1  # story j's drift at _CELL_FIRST_DRIFT + j - 1
+_CELL_FIRST_ACCEL = _CELL_FIRST_DRIFT + MAX_STORIES  # floor j's acceleration at _CELL_FIRST_ACCEL + j - 1
+assert _CELL_FIRST_ACCEL + MAX_STORIES <= _N_CELLS
 
 _CELLS_BYTES = 8 * _N_CELLS
 _RING_OFFSET = _CELLS_BYTES
 _TEXT_OFFSET = _RING_OFFSET + 8 * LATENESS_RING_SIZE
-_TEXT_OFFSETS = tuple(_TEXT_OFFSET + sum(capacity for _, capacity, _ in TEXT_FIELDS[:i]) for i in range(len(TEXT_FIELDS)))
-BLOCK_BYTES = _TEXT_OFFSET + sum(capacity for _, capacity, _ in TEXT_FIELDS)
+_TEXT_OFFSETS = tuple(_TEXT_OFFSET + sum(capacity for _, capacity, _ in _TEXT_SLOTS[:i]) for i in range(len(_TEXT_SLOTS)))
+BLOCK_BYTES = _TEXT_OFFSET + sum(capacity for _, capacity, _ in _TEXT_SLOTS)
 _READ_ATTEMPTS = 1000
+
+
+if TYPE_CHECKING:
+    _T = TypeVar("_T")
+
+    class _Field(Generic[_T]):
+        """How a type checker sees the properties :class:`LoopStatus` gets from the field tables."""
+
+        def __get__(self, status: LoopStatus | None, owner: type | None = None) -> _T: ...
+
+        def __set__(self, status: LoopStatus, value: _T) -> None: ...
 
 
 def truncate_utf8(encoded: bytes, capacity: int) -> bytes:
@@ -148,12 +177,12 @@ class _Views:
 
     __slots__ = ("raw", "cells", "numbers", "ring_cells", "ring")
 
-    def __init__(self, buffer):
+    def __init__(self, buffer: mmap.mmap | bytearray):
         self.raw = memoryview(buffer)
         self.cells = self.raw[:_CELLS_BYTES].cast("d")
-        self.numbers = np.frombuffer(buffer, dtype=np.float64, count=_N_CELLS)
+        self.numbers: np.ndarray | None = np.frombuffer(buffer, dtype=np.float64, count=_N_CELLS)  # None once released
         self.ring_cells = self.raw[_RING_OFFSET:_TEXT_OFFSET].cast("d")
-        self.ring = np.frombuffer(buffer, dtype=np.float64, count=LATENESS_RING_SIZE, offset=_RING_OFFSET)
+        self.ring: np.ndarray | None = np.frombuffer(buffer, dtype=np.float64, count=LATENESS_RING_SIZE, offset=_RING_OFFSET)
 
     def release(self) -> None:
         """Drop every export of the underlying buffer held here."""
@@ -198,6 +227,10 @@ class LoopStatus:
         Longest gap between two ticks' commands (s).
     missed_periods : int
         Tick periods the scheduler skipped.
+    fault_code : int
+        The servo's fault code in the latest ACTUATOR_STATUS (0 none).
+    n_stories : int
+        Stories published with :meth:`set_story` (0: none).
     last_event, trip_reason : str
         At most 256 and 128 UTF-8 bytes are kept.
     finished : bool
@@ -209,7 +242,27 @@ class LoopStatus:
     __slots__ = ("_views", "_cells", "_ring_cells", "_block", "_path", "_owner", "_last_text", "_lateness_count", "_finalizer",
                  "__weakref__")
 
-    def __init__(self, **fields):
+    if TYPE_CHECKING:  # the properties installed below the class, from NUMBER_FIELDS and TEXT_FIELDS
+        t_s = _Field[float]()
+        run_t_s = _Field[float]()
+        duration_s = _Field[float]()
+        stroke_m = _Field[float]()
+        force_N = _Field[float]()
+        sliding_variable = _Field[float]()
+        overruns = _Field[int]()
+        e2e_rejects = _Field[int]()
+        error_frames = _Field[int]()
+        send_failures = _Field[int]()
+        stalls = _Field[int]()
+        longest_stall_s = _Field[float]()
+        missed_periods = _Field[int]()
+        fault_code = _Field[int]()
+        n_stories = _Field[int]()
+        phase = _Field[str]()
+        last_event = _Field[str]()
+        trip_reason = _Field[str]()
+
+    def __init__(self, **fields: object):
         block, path = _create_block()
         self._bind(block, path, owner=True)
         try:
@@ -225,7 +278,7 @@ class LoopStatus:
             raise
 
     @classmethod
-    def attach(cls, path: str | os.PathLike, writable: bool = False) -> "LoopStatus":
+    def attach(cls, path: str | os.PathLike, writable: bool = False) -> LoopStatus:
         """Map the block another process created at ``path`` (it stays that process's to remove).
 
         Parameters
@@ -244,16 +297,17 @@ class LoopStatus:
         if status._cells[_CELL_MAGIC] != _MAGIC:
             status.close()
             raise ValueError(f"{path} is not a loop status block (bad magic number)")
-        status._last_text = [status._read_text(i) for i in range(len(TEXT_FIELDS))]
+        status._last_text = [status._read_text(i) for i in range(len(_TEXT_SLOTS))]
         status._lateness_count = int(status._cells[_CELL_LATENESS_COUNT])
         return status
 
     def _bind(self, block: mmap.mmap, path: str, owner: bool) -> None:
-        self._block = block
+        self._block: mmap.mmap | None = block  # None once closed
         self._path = path
         self._owner = owner
         self._use_views(_Views(block))
-        self._last_text = [None] * len(TEXT_FIELDS)
+        #: The text last written to each text field (None: not yet), to skip rewriting the same.
+        self._last_text: list[str | None] = [None] * len(_TEXT_SLOTS)
         self._lateness_count = 0
         self._finalizer = weakref.finalize(self, _release_block, block, path if owner else None)
 
@@ -288,7 +342,7 @@ class LoopStatus:
         self._block = None
         self._finalizer()
 
-    def __enter__(self) -> "LoopStatus":
+    def __enter__(self) -> LoopStatus:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -302,8 +356,8 @@ class LoopStatus:
         return STATE_NAMES[int(self._cells[_CELL_STATE])]
 
     @state.setter
-    def state(self, value) -> None:
-        code = _STATE_CODES.get(value, -1) if value.__class__ is str else value  # a name, or a State (an int)
+    def state(self, value: str | int) -> None:
+        code = value if isinstance(value, int) else _STATE_CODES.get(value, -1)  # a State (an int), or a name
         if not 0 <= code < _N_STATES:
             raise ValueError(f"unknown run state {value!r}; expected one of {', '.join(STATE_NAMES)}")
         self._cells[_CELL_STATE] = code
@@ -333,7 +387,9 @@ class LoopStatus:
     def recent_lateness_s(self) -> np.ndarray:
         """A copy of the lateness values in the ring (s), in no particular order."""
         n = min(self.lateness_count, LATENESS_RING_SIZE)
-        return self._views.ring[:n].copy()
+        ring = self._views.ring
+        assert ring is not None, "only the views close() replaced are released"
+        return ring[:n].copy()
 
     def lateness_percentiles(self) -> tuple[float, float]:
         """Lateness p50 and p99 over the ring (s); (0, 0) before the first tick."""
@@ -343,12 +399,47 @@ class LoopStatus:
         p50, p99 = np.percentile(recent, [50, 99])
         return float(p50), float(p99)
 
+    # -- stories and events ------------------------------------------------------------------
+
+    def set_story(self, index: int, drift_m: float, floor_acceleration_m_s2: float) -> None:
+        """Publish story ``index + 1``'s interstory drift (m) and its floor's absolute acceleration (m/s^2).
+
+        Two cell stores, no allocation: the tick calls it for every story, every tick.
+        ``index`` counts from 0 (story 1) and must be below :data:`MAX_STORIES`.
+        """
+        cells = self._cells
+        cells[_CELL_FIRST_DRIFT + index] = drift_m
+        cells[_CELL_FIRST_ACCEL + index] = floor_acceleration_m_s2
+
+    def stories(self) -> list[tuple[float, float]]:
+        """``(drift_m, floor_acceleration_m_s2)`` of stories 1 .. :attr:`n_stories`, bottom up."""
+        cells = self._cells
+        count = min(max(self.n_stories, 0), MAX_STORIES)
+        return [(cells[_CELL_FIRST_DRIFT + j], cells[_CELL_FIRST_ACCEL + j]) for j in range(count)]
+
+    def add_event(self, line: str) -> None:
+        """Append one line to the ring of recent events (the oldest of :data:`EVENT_LINES` is dropped; allocates)."""
+        count = int(self._cells[_CELL_EVENT_COUNT])
+        self._write_text(_FIRST_EVENT_SLOT + count % EVENT_LINES, line)
+        self._cells[_CELL_EVENT_COUNT] = count + 1
+
+    @property
+    def event_count(self) -> int:
+        """Event lines added so far (the ring keeps the last :data:`EVENT_LINES`)."""
+        return int(self._cells[_CELL_EVENT_COUNT])
+
+    def recent_events(self) -> list[str]:
+        """The most recent event lines, oldest first."""
+        count = self.event_count
+        first = max(0, count - EVENT_LINES)
+        return [self._read_text(_FIRST_EVENT_SLOT + k % EVENT_LINES) for k in range(first, count)]
+
     # -- text fields -------------------------------------------------------------------------
 
     def _write_text(self, index: int, value: str | None) -> None:
-        """Encode, truncate and store text field ``index`` under its sequence number (allocates)."""
+        """Encode, truncate and store text slot ``index`` under its sequence number (allocates)."""
         text = "" if value is None else str(value)
-        _, capacity, _ = TEXT_FIELDS[index]
+        _, capacity, _ = _TEXT_SLOTS[index]
         encoded = truncate_utf8(text.encode("utf-8", "replace"), capacity)
         offset, sequence = _TEXT_OFFSETS[index], _CELL_FIRST_TEXT + 2 * index
         cells = self._cells
@@ -359,8 +450,8 @@ class LoopStatus:
         self._last_text[index] = text
 
     def _read_text(self, index: int) -> str:
-        """Text field ``index`` as stored (retries while the writer is half-way through)."""
-        _, capacity, _ = TEXT_FIELDS[index]
+        """Text slot ``index`` as stored (retries while the writer is half-way through)."""
+        _, capacity, _ = _TEXT_SLOTS[index]
         offset, sequence = _TEXT_OFFSETS[index], _CELL_FIRST_TEXT + 2 * index
         cells, raw = self._cells, self._views.raw
         data = b""
@@ -387,25 +478,24 @@ class LoopStatus:
 
 def _number_property(cell: int, is_integer: bool, doc: str) -> property:
     """A property storing a number in float64 cell ``cell`` (integers read back as int)."""
-    if is_integer:
-        def read(self) -> int:
-            return int(self._cells[cell])
-    else:
-        def read(self) -> float:
-            return self._cells[cell]
+    def read_int(self: LoopStatus) -> int:
+        return int(self._cells[cell])
 
-    def write(self, value) -> None:
+    def read_float(self: LoopStatus) -> float:
+        return self._cells[cell]
+
+    def write(self: LoopStatus, value: float) -> None:
         self._cells[cell] = value
 
-    return property(read, write, doc=doc)
+    return property(read_int if is_integer else read_float, write, doc=doc)
 
 
 def _text_property(index: int, name: str, capacity: int) -> property:
     """A property storing UTF-8 text; a write is one comparison unless the text changed."""
-    def read(self) -> str:
+    def read(self: LoopStatus) -> str:
         return self._read_text(index)
 
-    def write(self, value: str) -> None:
+    def write(self: LoopStatus, value: str) -> None:
         if value == self._last_text[index]:
             return
         self._write_text(index, value)

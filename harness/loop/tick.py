@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -20,9 +21,14 @@ from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
 from harness.loop.trip_outputs import TripOutputs
+from harness.memory import float_view
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
+
+if TYPE_CHECKING:
+    from drivers.link import HarnessLink
+    from harness.loop.status import LoopStatus
 
 # Positions in the row (harness.rowlayout.CONTROL_ROW) of what the tick records, looked up by
 # name once, at import. Module constants: a store through one costs what a literal index costs
@@ -56,6 +62,18 @@ _ERROR_FRAMES = _AT[layout.ERROR_FRAMES]
 _SEND_FAILURES = _AT[layout.SEND_FAILURES]
 
 
+class TickRecorder(Protocol):
+    """Where the tick records its row and the supervisor's events (a :class:`~harness.recording.runfolder.RunFolder`)."""
+
+    def record_row(self, values: np.ndarray) -> object:
+        """Queue one row; never blocks."""
+        ...
+
+    def record_event(self, t: float, kind: str, name: str, detail: str) -> object:
+        """Queue one event; never blocks."""
+        ...
+
+
 class ControlTick:
     """The work of one tick, wired once to the link, controller, estimator, supervisor and recorder.
 
@@ -63,11 +81,11 @@ class ControlTick:
     ----------
     link : drivers.link.HarnessLink
         Reader (polls the bus itself) and writer of the harness side.
-    controller : object
+    controller : Controller
         ``update(t, dt, meas, friction_N, state) -> force`` with visible internals.
     estimator : FrictionEstimator
     supervisor : Supervisor
-    recorder : object, optional
+    recorder : TickRecorder, optional
         Has ``record_row(row)`` and ``record_event(t, kind, name, detail)`` (a RunFolder).
     heartbeat_every : int
         Send the heartbeat every this many ticks.
@@ -80,8 +98,15 @@ class ControlTick:
     """
 
     def __init__(
-        self, link, controller: Controller, estimator: FrictionEstimator, supervisor: Supervisor, recorder=None, heartbeat_every: int = 5,
-        estop_every: int = 5, stop_table: Callable[[float], object] | None = None,
+        self,
+        link: HarnessLink,
+        controller: Controller,
+        estimator: FrictionEstimator,
+        supervisor: Supervisor,
+        recorder: TickRecorder | None = None,
+        heartbeat_every: int = 5,
+        estop_every: int = 5,
+        stop_table: Callable[[float], object] | None = None,
     ):
         self.reader = link.reader
         self.writer = link.writer
@@ -93,7 +118,7 @@ class ControlTick:
         self.health = TickHealth()
         self.meas = self.health.meas
         self.row = np.zeros(len(layout.CONTROL_ROW))
-        self._row_mv = memoryview(self.row)  # the tick writes through it: a third of a numpy item store
+        self._row_mv = float_view(self.row)  # the tick writes through it: a third of a numpy item store
         self.heartbeat_every = max(1, int(heartbeat_every))
         self.ticks = 0
         #: Times the zero, disabled command could not be sent (the drive watchdog is then the backstop).
@@ -106,7 +131,13 @@ class ControlTick:
         self._xdd0 = self._table.index("xddot_0")
         self._yddb = self._base.index("yddot_b")
         self._story_slots = self._story_row_slots()
-        self._sink = self._record_event if recorder is not None else self._keep_event
+        #: The live console's status block, if any (:meth:`attach_status`): stories, fault code and event lines.
+        self.status: LoopStatus | None = None
+        self._status_stories = tuple(
+            (j - 1, self._drifts.values, self._drifts.index(f"drift_{j}"), self._accels.values, self._accels.index(f"accel_{j}"))
+            for j in range(1, layout.PROTOCOL_STORIES + 1)
+        )
+        self._sink: Callable[[float, str, str, str], None] = self._record_event if recorder is not None else self._keep_event
         #: The trip's ESTOP frame and table stop (safety.trip_actions), sent after the disable command.
         self.trip_outputs = TripOutputs(link.writer, supervisor.config.trip_actions, estop_every, stop_table)
 
@@ -172,6 +203,8 @@ class ControlTick:
             self._fill_row(t, command, friction, raw, lateness_s, time.perf_counter() - started, missed_periods)
             if self.recorder is not None:
                 self.recorder.record_row(self.row)
+            if self.status is not None:
+                self.publish(self.status)
         except Exception as exc:  # noqa: BLE001 - a fault in our own recording code: trip now, zero sent at once
             command = supervisor.report_exception(t, exc)
             self.send_disable(now)
@@ -217,7 +250,9 @@ class ControlTick:
             *((_AT[layout.floor_acceleration(j)], accels.values, accels.index(f"accel_{j}")) for j in stories),
         )
 
-    def _fill_row(self, t, command, friction, raw, lateness, compute, overrun) -> None:
+    def _fill_row(
+        self, t: float, command: SupervisedCommand, friction: float, raw: float, lateness: float, compute: float, overrun: int
+    ) -> None:
         """Write this tick's values into the row: one store per column, through the named positions."""
         row, meas, health, controller = self._row_mv, self.meas, self.health, self.controller
         row[_T] = t
@@ -249,12 +284,30 @@ class ControlTick:
         row[_ERROR_FRAMES] = health.error_frames
         row[_SEND_FAILURES] = health.send_failures
 
+    def attach_status(self, status: LoopStatus) -> None:
+        """Publish into the live console's status block from now on: story drifts and floor accelerations,
+        the servo's fault code (every tick, no allocation) and a line per event."""
+        status.n_stories = layout.PROTOCOL_STORIES
+        self.status = status
+
+    def publish(self, status: LoopStatus) -> None:
+        """Copy the latest story drifts (m), floor accelerations (m/s^2) and fault code into ``status`` (cell stores)."""
+        for index, drifts, drift_at, accels, accel_at in self._status_stories:
+            status.set_story(index, drifts[drift_at], accels[accel_at])
+        status.fault_code = self.reader.fault_code
+
     def _record_event(self, t: float, kind: str, name: str, detail: str) -> None:
         self.last_event = f"{t:8.3f} s  {kind} {name}: {detail}"
-        self.recorder.record_event(t, kind, name, detail)
+        if self.status is not None:
+            self.status.add_event(self.last_event)
+        recorder = self.recorder
+        assert recorder is not None, "the event sink when the tick was given a recorder"  # per event, not per tick
+        recorder.record_event(t, kind, name, detail)
 
     def _keep_event(self, t: float, kind: str, name: str, detail: str) -> None:
         self.last_event = f"{t:8.3f} s  {kind} {name}: {detail}"
+        if self.status is not None:
+            self.status.add_event(self.last_event)
 
     @property
     def state(self) -> State:

@@ -8,7 +8,8 @@ cuts, scales to the target PGA and corrects the baseline into a
 integrals of one another under the piecewise-linear rule of :mod:`.integration`;
 :func:`check_table_limits` (:mod:`.limits`) refuses what the table cannot follow;
 :func:`summarize` (:mod:`.summary`) reports PGA/PGV/PGD, Arias intensity,
-significant duration and periods. :mod:`.catalog` finds record files by name and
+significant duration and periods; :func:`response_spectrum` (:mod:`.spectrum`) the
+damped elastic response spectrum. :mod:`.catalog` finds record files by name and
 :func:`load_motion` (:mod:`.config`) does all of it from the profile's ``record:``
 section and CLI overrides.
 """
@@ -37,10 +38,12 @@ from harness.motions.limits import (
     TableLimitError,
     TableLimits,
     check_table_limits,
+    largest_fitting_pga_g,
     table_excesses,
 )
 from harness.motions.loaders import RawRecord, load_record
 from harness.motions.processing import GroundMotion, process_record
+from harness.motions.spectrum import ResponseSpectrum, response_spectrum
 from harness.motions.summary import MotionSummary, summarize
 from harness.motions.synthetic import synthetic_record
 
@@ -58,10 +61,12 @@ __all__ = [
     "RawRecord",
     "RecordConfig",
     "RecordListing",
+    "ResponseSpectrum",
     "TableLimitError",
     "TableLimits",
     "check_table_limits",
     "integrate_from_rest",
+    "largest_fitting_pga_g",
     "interpolate",
     "interpolate_scalar",
     "list_records",
@@ -72,6 +77,7 @@ __all__ = [
     "process_record",
     "records_dir_from",
     "resolve_record",
+    "response_spectrum",
     "rule_residuals",
     "summarize",
     "synthetic_record",

@@ -232,6 +232,6 @@ def list_records(records_dir: str | Path | None) -> list[RecordListing]:
     if folder is not None and folder.is_dir():
         for path in sorted(folder.iterdir()):
             if path.is_file() and path.suffix.lower() in RECORD_SUFFIXES and path.name not in claimed:
-                listing.append(RecordListing(path.stem, path, True, f"file {path.name}"))
+                listing.append(RecordListing(path.stem, path, True, "a record file that is not in the catalog"))
     listing.append(RecordListing(SYNTHETIC, None, True, "Clough-Penzien filtered white noise, seeded (synthetic:SEED)"))
     return listing

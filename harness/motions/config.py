@@ -138,6 +138,26 @@ def load_motion(
     GroundMotion
         Compressed, cut, scaled and baseline-corrected.
     """
+    return load_raw_and_motion(config, base_dir=base_dir, records_dir_flag=records_dir_flag, name=name, pga_g=pga_g,
+                               time_scale=time_scale, duration_s=duration_s, accel_unit=accel_unit, env=env)[1]
+
+
+def load_raw_and_motion(
+    config: RecordConfig,
+    *,
+    base_dir: str | Path,
+    records_dir_flag: str | Path | None = None,
+    name: str | None = None,
+    pga_g: float | None = None,
+    time_scale: float | None = None,
+    duration_s: float | None = None,
+    accel_unit: str | None = None,
+    env: Mapping[str, str] = os.environ,
+) -> tuple[RawRecord, GroundMotion]:
+    """:func:`load_motion`, and the raw record it was processed from (``harness records`` shows both).
+
+    Parameters and errors as :func:`load_motion`.
+    """
     chosen_name = name if name is not None else resolve_record_name(config.name, base_dir)
     scale = time_scale if time_scale is not None else config.time_scale
     duration = duration_s if duration_s is not None else config.duration_s
@@ -157,7 +177,7 @@ def load_motion(
             f"record {motion.name!r} runs {motion.duration_s:g} s after a time scale of {scale:g}, expected at most "
             f"{MAX_DURATION_S:g} s (what a run or a simulation may allocate); cut it with --duration or record.duration_s"
         )
-    return motion
+    return raw, motion
 
 
 def resolve_record_name(name: str, base_dir: str | Path) -> str:

@@ -100,3 +100,24 @@ def check_table_limits(motion: GroundMotion, limits: TableLimits) -> None:
     excesses = table_excesses(motion, limits)
     if excesses:
         raise TableLimitError(motion.name, excesses)
+
+
+def largest_fitting_pga_g(motion: GroundMotion, limits: TableLimits) -> tuple[float, str]:
+    """The largest PGA (g) at which ``motion`` fits the table, and the limit that sets it.
+
+    Processing is linear in the target PGA (one scale factor for acceleration, velocity and
+    displacement, and a linear baseline correction), so each peak scales with the PGA and the
+    tightest ratio of limit to peak gives the answer.
+
+    Returns
+    -------
+    (float, str)
+        The PGA (g) and the name of the binding limit (``"stroke"``, ``"velocity"``, ``"acceleration"``).
+    """
+    ratios = {
+        "stroke": limits.stroke_limit_m / motion.pgd_m if motion.pgd_m > 0 else math.inf,
+        "velocity": limits.velocity_limit_m_s / motion.pgv_m_s if motion.pgv_m_s > 0 else math.inf,
+        "acceleration": limits.acceleration_limit_g / motion.pga_g if motion.pga_g > 0 else math.inf,
+    }
+    binding = min(ratios, key=lambda name: ratios[name])
+    return motion.pga_g * ratios[binding], binding

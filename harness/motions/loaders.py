@@ -353,7 +353,8 @@ def _parse_keyed(lines: Sequence[Line], file: Path, unit: str | None) -> tuple[f
             linenos.append(number)
     count_key = next((k for k in ("npts", "ndata") if k in keys), None)
     if count_key and int(float(keys[count_key][1])) != len(values):
-        raise RecordError(f"{file}:{keys[count_key][0]}: header says {count_key}={keys[count_key][1]}, found {len(values)} values")
+        header_line, stated = keys[count_key]
+        raise RecordError(f"{file}:{header_line}: header says {count_key}={stated}, found {len(values)} values")
     check_count(len(values), file)
     _check_stated_peak(keys.get("max.acc"), np.array(values), file)
     return dt, np.array(values), np.array(linenos), stated

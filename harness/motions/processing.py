@@ -100,7 +100,8 @@ class GroundMotion(SampledAcceleration):
         for field in ("t_s", "accel_m_s2", "velocity_m_s", "displacement_m"):
             array = np.array(getattr(self, field), dtype=float)
             if array.shape != (np.size(self.t_s),):
-                raise RecordError(f"ground motion {self.name!r}: {field} has shape {array.shape}, expected ({np.size(self.t_s)},)")
+                expected = f"({np.size(self.t_s)},)"
+                raise RecordError(f"ground motion {self.name!r}: {field} has shape {array.shape}, expected {expected}")
             array.flags.writeable = False
             object.__setattr__(self, field, array)
 

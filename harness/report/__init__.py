@@ -2,8 +2,9 @@
 
 Public API::
 
-    build_report(run_paths, out_dir=None, progress=None) -> ReportResult
-    summary_text(result) -> str
+    build_report(run_paths, out_dir=None, progress=None, labels=None, plot_options=None) -> ReportResult
+    summary_text(result, width=None) -> str
+    distinct_labels(runs) -> list[str]       # labels from what differs between runs
     PeakTable: .to_rich(), .to_text(), .to_html(), .to_csv()
     reduction_table(passive_peaks, controlled_peaks, title, labels)   # the consoles' table
     runs_table(runs), pair_table(passive, controlled), comparison_table(a, b)
@@ -25,10 +26,11 @@ _EXPORTS = {
     "ReportResult": "harness.report.build",
     "build_report": "harness.report.build",
     "comparison_table": "harness.report.tables",
+    "distinct_labels": "harness.report.labels",
     "pair_table": "harness.report.tables",
     "reduction_table": "harness.report.tables",
     "runs_table": "harness.report.tables",
-    "summary_text": "harness.report.build",
+    "summary_text": "harness.report.summary",
 }
 
 __all__ = [
@@ -38,6 +40,7 @@ __all__ = [
     "ReportResult",
     "build_report",
     "comparison_table",
+    "distinct_labels",
     "pair_table",
     "reduction_table",
     "runs_table",

@@ -1,13 +1,19 @@
 """``harness report RUN [RUN ...]``: tables, plots, one HTML page and a console summary.
 
-Which tables a set of runs gets:
+Every run gets a label made from what differs between the runs (:mod:`harness.report.labels`),
+used in every table, legend, CSV header and file name. Which peak tables a set of runs gets:
 
 - always the peak table of all runs side by side;
 - a passive/controlled table for each controlled run that has a passive run of the
   same record (a passive run is ``case: passive`` or ``controller: passive``);
+- for a dry run, the table against its simulated passive reference and the one against
+  its rig twin, as its console printed them (:mod:`harness.report.reference`);
 - a comparison table for each two runs of the same record that are both controlled
   or both passive and not cases of one simulation (e.g. a table run against its
   simulation). Runs whose metadata names no record match any record.
+
+Then the context: the record's facts, the table's target against achieved motion, the
+controller's parameters, the loop timing, and each run's events and interlocks.
 """
 
 from __future__ import annotations
@@ -16,12 +22,20 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness.recording.reader import RunData, load_runs
+from harness.recording.layout import METADATA_FILE
+from harness.recording.reader import RunData, case_folders, load_runs
+from harness.report.context import controller_table, record_table, timing_table
+from harness.report.drive_faults import fault_text
+from harness.report.events_table import event_tables
 from harness.report.figure import PlotFile
 from harness.report.html import report_html
+from harness.report.labels import file_slug, with_labels
 from harness.report.peak_table import PeakTable
-from harness.report.plots import PLOTS
+from harness.report.plots import PLOT_NAMES, PLOTS, PlotOptions
+from harness.report.reference import reference_tables, target_motion_table
+from harness.report.summary import summary_text
 from harness.report.tables import comparison_table, pair_table, runs_table
+from harness.report.text_table import TextTable
 
 #: ``progress(message, done, total)``: called before each step and once at the end (done == total).
 Progress = Callable[[str, int, int], None]
@@ -29,6 +43,8 @@ Progress = Callable[[str, int, int], None]
 REPORT_HTML = "report.html"
 SUMMARY_TXT = "summary.txt"
 MAX_COMPARISONS = 6
+
+__all__ = ["ReportResult", "build_report", "load_labelled", "summary_text"]
 
 
 @dataclass
@@ -44,21 +60,24 @@ class ReportResult:
     plots : list of PlotFile
         Written PNGs (plots without data are skipped).
     tables : list of PeakTable
-        Peak, pair and comparison tables.
+        Peak, pair, reference and comparison tables.
+    context : list of TextTable
+        Record, target against achieved table motion, controller, loop timing, events and interlocks.
     runs : list of RunData
-        The runs read.
+        The runs read, each with its report label (:attr:`RunData.label`).
     table_files : list of Path
         One CSV per table (``table_1_peak_responses.csv`` ...), for spreadsheets and MATLAB.
     warnings : list of str
         Incomplete runs, torn files, mismatched records ...
     summary : str
-        Plain-text summary for the console (also in ``summary.txt``).
+        Plain-text summary (``summary.txt``; the console prints it at its own width).
     """
 
     out_dir: Path
     html_path: Path
     plots: list[PlotFile] = field(default_factory=list)
     tables: list[PeakTable] = field(default_factory=list)
+    context: list[TextTable] = field(default_factory=list)
     runs: list[RunData] = field(default_factory=list)
     table_files: list[Path] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
@@ -95,11 +114,18 @@ def comparison_pairs(runs: Sequence[RunData]) -> list[tuple[RunData, RunData]]:
 
 
 def build_tables(runs: Sequence[RunData]) -> list[PeakTable]:
-    """The peak table, then passive/controlled tables, then comparison tables."""
+    """The peak table, then passive/controlled tables, the dry runs' reference tables, then comparison tables."""
     tables = [runs_table(runs)]
     tables += [pair_table(p, c) for p, c in passive_pairs(runs)]
+    tables += reference_tables(runs)
     tables += [comparison_table(a, b) for a, b in comparison_pairs(runs)]
     return tables
+
+
+def build_context(runs: Sequence[RunData]) -> list[TextTable]:
+    """Record, target against achieved table motion, controller, loop timing, then each run's events and interlocks."""
+    tables = [record_table(runs), target_motion_table(runs), controller_table(runs), timing_table(runs)]
+    return [table for table in tables if table is not None] + event_tables(runs)
 
 
 def _record_warnings(runs: Sequence[RunData]) -> list[str]:
@@ -113,7 +139,8 @@ def _record_warnings(runs: Sequence[RunData]) -> list[str]:
             notes.append(f"run {run.label} has no recorded rows; its plots are empty")
         if run.outcome in ("tripped", "error"):
             reason = run.metadata.get("trip_reason") or "no reason recorded"
-            notes.append(f"run {run.label} ended {run.outcome}: {reason}")
+            servo = fault_text(run) if reason == "drive_fault" else ""
+            notes.append(f"run {run.label} ended {run.outcome}: {reason}" + (f" ({servo})" if servo else ""))
         recorder = run.metadata.get("recorder") or {}
         dropped = recorder.get("dropped") or {}
         if any(dropped.values()):
@@ -123,8 +150,39 @@ def _record_warnings(runs: Sequence[RunData]) -> list[str]:
     return notes
 
 
+def _expand_batch(folder: Path) -> list[Path]:
+    """A batch folder (``simulate --out`` with lists: a folder of case sets) as its case sets; else ``[folder]``."""
+    if not folder.is_dir() or (folder / METADATA_FILE).is_file() or case_folders(folder):
+        return [folder]
+    sets = sorted(p for p in folder.iterdir() if p.is_dir() and case_folders(p))
+    return sets or [folder]
+
+
+def load_labelled(run_paths: Sequence[Path | str], labels: Sequence[str] | None = None) -> list[RunData]:
+    """Read the run folders and label every run (:func:`harness.report.labels.with_labels`).
+
+    Parameters
+    ----------
+    run_paths : sequence of Path or str
+        Run folders or case sets.
+    labels : sequence of str, optional
+        A label per path, in order (``--label``); a case set's cases get it followed by their case name.
+    """
+    runs: list[RunData] = []
+    given: list[str | None] = []
+    for index, item in enumerate(run_paths):
+        loaded = load_runs(_expand_batch(Path(item)))
+        chosen = labels[index] if labels is not None and index < len(labels) else None
+        for run in loaded:
+            case_set = len(loaded) > 1 and run.case is not None
+            given.append(None if chosen is None else f"{chosen} {run.case}" if case_set else chosen)
+        runs += loaded
+    return with_labels(runs, given)
+
+
 def build_report(
-    run_paths: Sequence[Path | str], out_dir: Path | str | None = None, progress: Progress | None = None
+    run_paths: Sequence[Path | str], out_dir: Path | str | None = None, progress: Progress | None = None,
+    labels: Sequence[str] | None = None, plot_options: PlotOptions | None = None,
 ) -> ReportResult:
     """Build the report of one or more run folders (or simulation case sets).
 
@@ -136,6 +194,10 @@ def build_report(
         Output folder (created); default ``<first path given>/report``.
     progress : callable, optional
         ``progress(message, done, total)`` before each step and at the end.
+    labels : sequence of str, optional
+        A label per path (``--label``), instead of the one made from what differs.
+    plot_options : PlotOptions, optional
+        Story height for drift ratios, ...
 
     Returns
     -------
@@ -152,49 +214,38 @@ def build_report(
     notify = progress or (lambda message, done, total: None)
     total = len(PLOTS) + 3
     notify("reading run folders", 0, total)
-    runs = load_runs(run_paths)
+    runs = load_labelled(run_paths, labels)
     target = Path(out_dir) if out_dir is not None else Path(run_paths[0]) / "report"
     target.mkdir(parents=True, exist_ok=True)
+    _remove_previous(target)
     result = ReportResult(out_dir=target, html_path=target / REPORT_HTML, runs=runs, warnings=_record_warnings(runs))
     notify("computing peak tables", 1, total)
     result.tables = build_tables(runs)
-    result.table_files = [_write_table_csv(target, index, table) for index, table in enumerate(result.tables, start=1)]
+    result.context = build_context(runs)
+    all_tables: list[PeakTable | TextTable] = [*result.tables, *result.context]
+    result.table_files = [_write_table_csv(target, index, table) for index, table in enumerate(all_tables, start=1)]
+    options = plot_options or PlotOptions()
     for step, plot in enumerate(PLOTS, start=2):
         notify(f"plotting {plot.__name__.removesuffix('_plot').replace('_', ' ')}", step, total)
-        written = plot(runs, target)
+        written = plot(runs, target, options)
         if written is not None:
             result.plots.append(written)
     notify("writing HTML", total - 1, total)
     result.summary = summary_text(result)
     (target / SUMMARY_TXT).write_text(result.summary + "\n", encoding="utf-8")
-    result.html_path.write_text(report_html(runs, result.tables, result.plots, result.warnings), encoding="utf-8")
+    page = report_html(runs, result.tables, result.plots, result.warnings, result.context)
+    result.html_path.write_text(page, encoding="utf-8")
     notify("done", total, total)
     return result
 
 
-def _write_table_csv(out_dir: Path, index: int, table: PeakTable) -> Path:
-    slug = "".join(ch if ch.isalnum() else "_" for ch in table.title.lower()).strip("_")
-    while "__" in slug:
-        slug = slug.replace("__", "_")
-    path = out_dir / f"table_{index}_{slug[:60]}.csv"
+def _remove_previous(out_dir: Path) -> None:
+    """Remove the tables and plots an earlier report wrote into ``out_dir`` (names change with the labels)."""
+    for path in [*out_dir.glob("table_*.csv"), *(out_dir / f"{name}.png" for name in PLOT_NAMES)]:
+        path.unlink(missing_ok=True)
+
+
+def _write_table_csv(out_dir: Path, index: int, table: PeakTable | TextTable) -> Path:
+    path = out_dir / f"table_{index}_{file_slug(table.title)}.csv"
     path.write_text(table.to_csv(), encoding="utf-8")
     return path
-
-
-def summary_text(result: ReportResult) -> str:
-    """Plain-text summary for the console: runs, warnings, tables and where the files are."""
-    lines = ["Runs:"]
-    for run in result.runs:
-        reason = f" ({run.metadata.get('trip_reason')})" if run.metadata.get("trip_reason") else ""
-        lines.append(f"  {run.label}: {run.kind}, {run.outcome}{reason}, {run.n_rows} ticks, {run.path}")
-    if result.warnings:
-        lines.append("Warnings:")
-        lines += [f"  ! {w}" for w in result.warnings]
-    for table in result.tables:
-        lines += ["", table.to_text()]
-    lines += [
-        "",
-        f"Report: {result.html_path}",
-        f"Plots: {len(result.plots)} PNG files, tables: {len(result.table_files)} CSV files in {result.out_dir}",
-    ]
-    return "\n".join(lines)

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -20,11 +21,12 @@ from harness.recording.reader import RunData
 DPI = 100
 WIDTH_PX = 1200
 
-#: Colours per run in order; the (first) passive run is drawn in grey so "controlled" stands out.
+#: Colours per run in order; passive runs are drawn in greys so the controlled runs stand out.
 _COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 PASSIVE_COLOUR = "#7f7f7f"
+_PASSIVE_COLOURS = (PASSIVE_COLOUR, "#404040", "#b0b0b0", "#5f5f5f")
 
-_STYLE = {
+_STYLE: dict[str, Any] = {
     "font.size": 11,
     "axes.titlesize": 12,
     "axes.labelsize": 11,
@@ -64,8 +66,8 @@ def figure(height_px: int, width_px: int = WIDTH_PX) -> Figure:
     return fig
 
 
-def style() -> dict[str, object]:
-    """Matplotlib rc settings for :func:`matplotlib.rc_context`."""
+def style() -> dict[Any, Any]:
+    """Matplotlib rc settings for :func:`matplotlib.rc_context` (keys typed loosely: matplotlib's stubs want literals)."""
     return dict(_STYLE)
 
 
@@ -78,15 +80,14 @@ def save(fig: Figure, name: str, title: str, out_dir: Path) -> PlotFile:
 
 
 def colours(runs: Sequence[RunData]) -> list[str]:
-    """One colour per run: grey for the first passive run, distinct colours for the others."""
+    """One colour per run: greys for the passive runs (the first one mid-grey), distinct colours for the others."""
     result = []
-    index = 0
-    grey_taken = False
+    controlled = passive = 0
     for run in runs:
-        if run.is_passive and not grey_taken:
-            result.append(PASSIVE_COLOUR)
-            grey_taken = True
+        if run.is_passive:
+            result.append(_PASSIVE_COLOURS[passive % len(_PASSIVE_COLOURS)])
+            passive += 1
         else:
-            result.append(_COLOURS[index % len(_COLOURS)])
-            index += 1
+            result.append(_COLOURS[controlled % len(_COLOURS)])
+            controlled += 1
     return result

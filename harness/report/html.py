@@ -13,11 +13,14 @@ from html import escape
 
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile
+from harness.report.labels import common_facts
 from harness.report.peak_table import PeakTable
+from harness.report.text_table import TextTable
 
 _CSS = """
 body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 2em auto; max-width: 1260px; color: #222; }
 h1 { font-size: 1.6em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #ccc; }
+h2.part { font-size: 1.4em; border-bottom: 2px solid #888; } h3 { margin-top: 1.2em; }
 table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.92em; }
 th, td { border: 1px solid #bbb; padding: 3px 8px; } th { background: #f0f0f0; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
@@ -46,7 +49,7 @@ def _runs_section(runs: Sequence[RunData]) -> str:
             str(run.path),
             run.kind,
             run.outcome + reason,
-            str(meta.get("controller", "-")),
+            "passive" if run.is_passive else str(meta.get("controller", "-")),
             run.record_name or "-",
             str(meta.get("start_time", "-")),
             str(run.n_rows),
@@ -77,30 +80,39 @@ def _figure_html(plot: PlotFile) -> str:
 
 
 def report_html(
-    runs: Sequence[RunData], tables: Sequence[PeakTable], plots: Sequence[PlotFile], warnings: Sequence[str]
+    runs: Sequence[RunData], tables: Sequence[PeakTable], plots: Sequence[PlotFile], warnings: Sequence[str],
+    context: Sequence[TextTable] = (),
 ) -> str:
     """The whole report page.
 
     Parameters
     ----------
     runs : sequence of RunData
+        Labelled (:func:`harness.report.labels.with_labels`).
     tables : sequence of PeakTable
     plots : sequence of PlotFile
         Written PNGs, embedded in order.
     warnings : sequence of str
         Shown in a highlighted box at the top.
+    context : sequence of TextTable
+        Record, table motion, controller, timing, events: after the peak tables.
     """
-    made = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-    title = "Shaking-table run report: " + ", ".join(run.label for run in runs)
+    made = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+    shared = common_facts(runs)
+    title = "Shaking-table run report" + (f": {shared}" if shared else "")
     warn = "".join(f"<p class='warn'>{escape(w)}</p>" for w in warnings)
     parts = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>{escape(title)}</title><style>{_CSS}</style></head><body>",
-        f"<h1>{escape(title)}</h1><p class='note'>Generated {escape(made)} by shaketable-harness.</p>",
+        f"<h1>{escape(title)}</h1><p class='note'>Generated {escape(made)} by shaketable-harness. "
+        f"Runs are labelled by what differs between them.</p>",
         warn,
         _runs_section(runs),
-        *(table.to_html() for table in tables),
-        "<h2>Plots</h2>" if plots else "",
+        "<h2 class='part'>Peak tables</h2>",
+        *(table.to_html().replace("<h2>", "<h3>").replace("</h2>", "</h3>") for table in tables),
+        "<h2 class='part'>What the runs were run with</h2>" if context else "",
+        *(table.to_html(level=3) for table in context),
+        "<h2 class='part'>Plots</h2>" if plots else "",
         *(_figure_html(p) for p in plots),
         "</body></html>",
     ]

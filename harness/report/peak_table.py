@@ -14,7 +14,10 @@ import io
 from dataclasses import dataclass
 from html import escape
 
+from rich import box
 from rich.table import Table
+
+from harness.report.text_table import TextTable
 
 #: What an absent cell shows.
 ABSENT = "-"
@@ -95,8 +98,9 @@ class PeakTable:
 
     def to_rich(self) -> Table:
         """A rich :class:`~rich.table.Table` for the console (the note as its caption)."""
-        table = Table(title=self.title, title_justify="left", caption=self.note or None, caption_justify="left")
-        table.add_column(self.headings[0], style="bold")
+        table = Table(title=self.title, title_justify="left", caption=self.note or None, caption_justify="left",
+                      box=box.SIMPLE_HEAVY, pad_edge=False)  # no vertical rules: it fits an 80-column terminal
+        table.add_column(self.headings[0], style="bold", no_wrap=True)
         table.add_column(self.headings[1])
         for heading in self.columns:
             table.add_column(heading, justify="right")
@@ -104,16 +108,18 @@ class PeakTable:
             table.add_row(*self.cells(row))
         return table
 
-    def to_text(self) -> str:
-        """Fixed-width plain text: title, underline, header, rows, note."""
-        header = [*self.headings, *self.columns]
-        body = [self.cells(row) for row in self.rows]
-        widths = [max(len(line[i]) for line in [header, *body]) for i in range(len(header))]
-        lines = [self.title, "=" * len(self.title), _text_line(header, widths), "  ".join("-" * w for w in widths)]
-        lines += [_text_line(line, widths) for line in body]
-        if self.note:
-            lines.append(self.note)
-        return "\n".join(lines)
+    def text_table(self) -> TextTable:
+        """The formatted cells as a :class:`~harness.report.text_table.TextTable` (quantity and unit are its keys)."""
+        return TextTable(self.title, (*self.headings, *self.columns), tuple(tuple(self.cells(row)) for row in self.rows),
+                         self.note, key_columns=2)
+
+    def to_text(self, width: int | None = None) -> str:
+        """Fixed-width plain text no wider than ``width`` columns (None: one block, any width).
+
+        Headings wrap within their columns; value columns that do not fit go to further
+        blocks, each repeating the quantity and unit columns.
+        """
+        return self.text_table().to_text(width)
 
     def to_html(self) -> str:
         """An HTML ``<h2>`` title, ``<table>`` and note (escaped; numbers in ``td.num``)."""
@@ -134,8 +140,3 @@ class PeakTable:
         for row in self.rows:
             writer.writerow([row.label, row.key, row.unit, *("" if v is None else repr(float(v)) for v in row.values)])
         return buffer.getvalue()
-
-
-def _text_line(cells: list[str], widths: list[int]) -> str:
-    """Label columns left-aligned, number columns right-aligned."""
-    return "  ".join(cell.ljust(w) if i < 2 else cell.rjust(w) for i, (cell, w) in enumerate(zip(cells, widths)))

@@ -79,7 +79,7 @@ class Wording:
 #: The report's tables (text, HTML, CSV).
 REPORT_WORDING = Wording(
     "Quantity", "Unit", "Story {j} drift", "Floor {j} abs. acceleration", "Base mat abs. acceleration",
-    "Base mat sliding displacement", "Peak control force / weight", "%", "m/s^2",
+    "Sliding displacement x_b", "Control force / weight", "%", "m/s^2",
 )
 
 #: The console tables of ``harness simulate`` and ``harness dry-run``.
@@ -119,6 +119,6 @@ def report_quantities(n_stories: int) -> list[Quantity]:
         Quantity("table_pgv", "Table peak velocity", "mm/s", 1e3, 1, "table_velocity_m_s", comparable=False),
         Quantity("table_pgd", "Table peak displacement", "mm", 1e3, 2, "table_displacement_m", comparable=False),
         *response_quantities(n_stories, REPORT_WORDING),
-        Quantity("measured_force_percent_weight", "Peak measured actuator force / weight", "%", 1.0, 2,
+        Quantity("measured_force_percent_weight", "Measured force / weight", "%", 1.0, 2,
                  "measured_force_pct_weight", comparable=False),
     ]

@@ -85,14 +85,21 @@ def runs_table(runs: Sequence[RunData]) -> PeakTable:
                      _force_note(runs))
 
 
+def peaks_pair_table(passive: Peaks, controlled: Peaks, title: str, labels: tuple[str, str], note: str = "") -> PeakTable:
+    """Passive against controlled peaks (report rows) with the percent reduction beside the controlled value."""
+    stories = max(passive.n_stories, controlled.n_stories)
+    rows = tuple(_reduction_row(q, passive, controlled) for q in report_quantities(stories))
+    columns = (*labels, "reduction (%)")
+    note = "reduction = (passive - hybrid) / passive. " + note
+    return PeakTable(title, _headings(REPORT_WORDING), columns, _drop_empty(rows), (None, None, PERCENT_DIGITS),
+                     note.strip())
+
+
 def pair_table(passive: RunData, controlled: RunData) -> PeakTable:
     """Passive against controlled peaks with the percent reduction beside the controlled value."""
-    base, hybrid = run_peaks(passive), run_peaks(controlled)
-    rows = tuple(_reduction_row(q, base, hybrid) for q in report_quantities(_stories((passive, controlled))))
-    columns = (f"passive: {passive.label}", f"controlled: {controlled.label}", "reduction (%)")
-    note = "reduction = (passive - hybrid) / passive. " + _force_note((controlled,))
-    return PeakTable("Passive against controlled", _headings(REPORT_WORDING), columns, _drop_empty(rows),
-                     (None, None, PERCENT_DIGITS), note)
+    first = passive.label if "passive" in passive.label else f"passive: {passive.label}"
+    return peaks_pair_table(run_peaks(passive), run_peaks(controlled), f"Passive against controlled: {controlled.label}",
+                            (first, controlled.label), _force_note((controlled,)))
 
 
 def _difference_row(quantity: Quantity, first: Peaks, second: Peaks) -> PeakRow:
@@ -103,16 +110,20 @@ def _difference_row(quantity: Quantity, first: Peaks, second: Peaks) -> PeakRow:
     return _row(quantity, (left, right, difference, percent))
 
 
-def comparison_table(first: RunData, second: RunData) -> PeakTable:
-    """Both runs' peaks, ``second - first`` and that difference in percent of ``first``."""
-    a, b = run_peaks(first), run_peaks(second)
-    rows = tuple(_difference_row(q, a, b) for q in report_quantities(_stories((first, second))))
-    columns = (first.label, second.label, "difference (B - A)", "difference (%)")
-    note = f"A = {first.label} ({first.path.name}); B = {second.label} ({second.path.name}). "
-    note += _force_note((first, second))
-    title = f"Comparison: {first.label} / {second.label}"
+def peaks_comparison_table(first: Peaks, second: Peaks, title: str, labels: tuple[str, str], note: str = "") -> PeakTable:
+    """Both peaks (report rows), ``second - first`` and that difference in percent of ``first``."""
+    stories = max(first.n_stories, second.n_stories)
+    rows = tuple(_difference_row(q, first, second) for q in report_quantities(stories))
+    columns = (*labels, "difference (B - A)", "difference (%)")
     return PeakTable(title, _headings(REPORT_WORDING), columns, _drop_empty(rows), (None, None, None, PERCENT_DIGITS),
                      note)
+
+
+def comparison_table(first: RunData, second: RunData) -> PeakTable:
+    """Both runs' peaks, ``second - first`` and that difference in percent of ``first``."""
+    note = f"A = {first.label} ({first.path}); B = {second.label} ({second.path}). " + _force_note((first, second))
+    return peaks_comparison_table(run_peaks(first), run_peaks(second), f"Comparison: {first.label} against {second.label}",
+                                  (f"A: {first.label}", f"B: {second.label}"), note)
 
 
 def _drop_empty(rows: tuple[PeakRow, ...]) -> tuple[PeakRow, ...]:
@@ -120,11 +131,17 @@ def _drop_empty(rows: tuple[PeakRow, ...]) -> tuple[PeakRow, ...]:
 
 
 def _force_note(runs: Sequence[RunData]) -> str:
-    """Which column each run's control force comes from (and whether its weight is known)."""
-    parts = []
-    for run in runs:
-        column = force_column(run.signals)
-        weight = run.metadata.get("total_weight_N")
-        if column:
-            parts.append(f"{run.label}: force from {column}" + ("" if weight else " (no total_weight_N in metadata)"))
-    return "; ".join(parts)
+    """Which column each run's control force comes from (once when all runs share it), and missing weights."""
+    sources = {run.label: force_column(run.signals) for run in runs if force_column(run.signals)}
+    if not sources:
+        return ""
+    columns = set(sources.values())
+    if len(columns) == 1:
+        text = f"Control force from {columns.pop()}"
+        text += " (every run)." if len(sources) > 1 else "."
+    else:
+        text = "Control force from " + "; ".join(f"{column} ({label})" for label, column in sources.items()) + "."
+    unweighed = [run.label for run in runs if run.label in sources and not run.metadata.get("total_weight_N")]
+    if unweighed:
+        text += f" No total_weight_N in the metadata of {', '.join(unweighed)}: force in % of weight absent."
+    return text

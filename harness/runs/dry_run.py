@@ -20,18 +20,23 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from drivers.link import HarnessLink
 from drivers.protocol_values import RigCommand
 from harness.control.factory import make_controller
 from harness.errors import BusError
 from harness.loop.table_link import CanTableLink
+from harness.loop.tick import ControlTick
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
+from harness.motions import GroundMotion
 from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.recording import load_run
+from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, run_session
 from harness.runs.simulate import (
     StudyOptions,
@@ -73,11 +78,15 @@ class DryRunResult:
     peaks: Peaks
     passive: CaseResult | None
     twin: CaseResult | None
-    motion: object
+    motion: GroundMotion
     span_s: float | None = None  # record time covered by a run that ended early (s); None: the whole record
 
     def largest_twin_difference(self) -> tuple[str, float]:
-        """The peak that differs most from the simulated twin's, and by how much (% of the twin's)."""
+        """The peak that differs most from the simulated twin's, and by how much (% of the twin's).
+
+        Only for a dry run compared with its twin (``DryRunOptions.compare``).
+        """
+        assert self.twin is not None, "a dry run run with compare=False has no twin"
         ours, twin = self.peaks.flatten(), self.twin.peaks.flatten()
         worst = max(twin, key=lambda k: abs(ours[k] - twin[k]) / abs(twin[k]) if twin[k] else 0.0)
         difference = abs(ours[worst] - twin[worst]) / abs(twin[worst]) * 100 if twin[worst] else 0.0
@@ -123,12 +132,14 @@ class RigCoordinator:
         self.period_s = period_s
         self.process = process
         self.appear_timeout_s = appear_timeout_s
-        self.link = None
+        self.link: HarnessLink | None = None  # set by on_link
         self.base_step = 0
         #: The virtual table's start and stop: the same RIG_CONTROL frames `harness run` sends a real one.
         self.table = CanTableLink(lockstep)
 
-    def _poll_until(self, done, timeout_s: float, what: str) -> None:
+    def _poll_until(self, done: Callable[[], bool], timeout_s: float, what: str) -> None:
+        link = self.link
+        assert link is not None, "polled from on_link, once the link is open"
         deadline = time.monotonic() + timeout_s
         while not done():
             process = self.process
@@ -137,12 +148,12 @@ class RigCoordinator:
                 raise BusError(f"the virtual rig process exited with status {process.returncode}: {detail}")
             if time.monotonic() > deadline:
                 raise BusError(
-                    f"{what} within {timeout_s:g} s on {self.link.bus.channel_info}; start a rig with "
+                    f"{what} within {timeout_s:g} s on {link.bus.channel_info}; start a rig with "
                     "`harness rig PROFILE --interface ... --channel ...` (or drop --external-rig)"
                 )
-            self.link.reader.poll(0.0, block_s=0.05)
+            link.reader.poll(0.0, block_s=0.05)
 
-    def on_link(self, link) -> None:
+    def on_link(self, link: HarnessLink) -> None:
         """Wait for the rig's status frames; switch it to lockstep and note its step count."""
         self.link = link
         self.table.attach(link)
@@ -155,7 +166,7 @@ class RigCoordinator:
             self.base_step = int(status.values[status.index("step_index")])
 
 
-    def lockstep_wait(self, tick):
+    def lockstep_wait(self, tick: ControlTick) -> Callable[[int, float], bool]:
         """The loop's lockstep wait: poll until the rig reports step ``base + k``."""
         reader = tick.reader
         status = reader.sample("RIG_STATUS")
@@ -176,7 +187,7 @@ class RigCoordinator:
 
 
 def simulated_twins(
-    profile: Profile, motion, rate_hz: float, controller: str, lockstep: bool, span_s: float | None = None,
+    profile: Profile, motion: GroundMotion, rate_hz: float, controller: str, lockstep: bool, span_s: float | None = None,
 ) -> tuple[CaseResult, CaseResult]:
     """The passive reference and the controlled rig twin of a dry run, simulated offline.
 
@@ -196,7 +207,7 @@ def simulated_twins(
     return passive, twin
 
 
-def record_span_s(session: SessionResult, motion) -> float | None:
+def record_span_s(session: SessionResult, motion: GroundMotion) -> float | None:
     """Record time a run that ended early covered (s); None when it ran the whole record."""
     if session.outcome == "completed":
         return None
@@ -260,6 +271,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     span = record_span_s(session, motion)
     if options.compare:
         passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep, span)
+    write_dry_run_context(session.run_path, motion, passive, twin, span, options.lockstep)  # for `harness report`
     return DryRunResult(session, profile, peaks, passive, twin, motion, span)
 
 

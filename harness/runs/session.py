@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from drivers.link import HarnessLink
 from harness import exit_codes
 from harness.can_config import CanConfig
 from harness.can_link import open_harness
@@ -27,6 +28,7 @@ from harness.loop.tick import ControlTick
 from harness.model.warmup import warm_up
 from harness.profile import Profile
 from harness.recording import RunFolder
+from harness.recording.layout import Outcome, RunKind
 from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
@@ -39,7 +41,7 @@ OUTCOME_EXIT = {"completed": exit_codes.OK, "tripped": exit_codes.TRIPPED, "stop
 class SessionSettings:
     """How one session runs (the command line's choices, resolved)."""
 
-    kind: str
+    kind: RunKind
     can: CanConfig
     rate_hz: float
     duration_s: float
@@ -54,7 +56,7 @@ class SessionSettings:
 class SessionResult:
     """What a session produced."""
 
-    outcome: str
+    outcome: Outcome
     trip_reason: str
     run_path: Path
     loop: LoopResult
@@ -150,7 +152,7 @@ def run_session(
     *,
     on_start: Callable[[float], None] | None = None,
     make_lockstep: Callable[[ControlTick], Callable[[int, float], bool]] | None = None,
-    on_link: Callable[[object], None] | None = None,
+    on_link: Callable[[HarnessLink], None] | None = None,
     on_host_timing: Callable[[HostTiming], None] | None = None,
     console=None,
     stop_table: Callable[[float], object] | None = None,
@@ -213,9 +215,11 @@ def run_session(
         host_timing = None if settings.lockstep else _check_host_timing(profile, settings, link, folder, on_host_timing)
         lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None
         status = LoopStatus()
+        tick.attach_status(status)  # stories, fault code and event lines for the live console
         loop = ControlLoop(tick, profile.loop, settings.rate_hz, settings.duration_s, lockstep, on_start, status,
                            table_running=table_link.running if table_link is not None else None)
-        title = f"{profile.name}: {settings.kind}, {settings.controller} at {settings.rate_hz:g} Hz" + (" (lockstep)" if lockstep else "")
+        title = f"{profile.name}: {settings.kind}, {settings.controller} at {settings.rate_hz:g} Hz"
+        title += " (lockstep)" if lockstep else ""
         alerts = (summary(profile.safety_weakened),) if profile.safety_weakened else ()
         with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,
                          profile.safety.force.max_force_N, title, loop.timing, console, settings.show_console, alerts):

@@ -65,7 +65,10 @@ def test_missing_record_message_names_everything_a_user_needs(tmp_path):
     with pytest.raises(RecordError) as info:
         resolve_record("pacoima", tmp_path)
     text = str(info.value)
-    for needed in ("'pacoima'", str(tmp_path.resolve()), "pacoima_1971_S16E.csv", "el_centro", "hachinohe", "RSN6", "RSN77", "PARI", "synthetic"):
+    for needed in (
+        "'pacoima'", str(tmp_path.resolve()), "pacoima_1971_S16E.csv",
+        "el_centro", "hachinohe", "RSN6", "RSN77", "PARI", "synthetic",
+    ):
         assert needed in text
 
 

@@ -61,7 +61,9 @@ def test_original_and_normalized_files_hold_the_same_samples(normalized, origina
 
 
 @needs_data
-@pytest.mark.parametrize("filename", ["hachinohe_1968_NS__aki32_Hachinohe-NS.csv", "elcentro_1940_NS_classic__kakemotokeita_sample.csv"])
+@pytest.mark.parametrize(
+    "filename", ["hachinohe_1968_NS__aki32_Hachinohe-NS.csv", "elcentro_1940_NS_classic__kakemotokeita_sample.csv"]
+)
 def test_originals_without_a_stated_unit_refuse_to_guess(filename):
     with pytest.raises(RecordError, match="unit is not stated") as info:
         load_record(DATA_DIR / filename)
@@ -126,7 +128,9 @@ def _at2(line4: str, values, unit_line="ACCELERATION TIME HISTORY IN UNITS OF G"
     return f"PEER RECORD\nSOME EVENT\n{unit_line}\n{line4}\n{body}\n"
 
 
-@pytest.mark.parametrize("line4", ["NPTS=  12, DT= .01000 SEC", "NPTS= 12 DT= 0.01", "npts=12, dt=0.01", "   12    .0100    NPTS, DT"])
+@pytest.mark.parametrize(
+    "line4", ["NPTS=  12, DT= .01000 SEC", "NPTS= 12 DT= 0.01", "npts=12, dt=0.01", "   12    .0100    NPTS, DT"]
+)
 def test_at2_npts_dt_variants(tmp_path, line4):
     record = load_record(_write(tmp_path, "r.AT2", _at2(line4, VALUES)))
     assert record.dt_s == pytest.approx(0.01)
@@ -197,7 +201,7 @@ def test_malformed_text_files_are_refused_with_a_clear_message(tmp_path, case):
 
 def test_non_uniform_time_names_the_line(tmp_path):
     times = [0.0, 0.01, 0.02, 0.03, 0.045, 0.05, 0.06, 0.07, 0.08, 0.09, 0.10, 0.11]
-    text = GOOD_HEADER + "".join(f"{t},{a}\n" for t, a in zip(times, VALUES))
+    text = GOOD_HEADER + "".join(f"{t},{a}\n" for t, a in zip(times, VALUES, strict=True))
     with pytest.raises(RecordError, match=r":6: non-uniform time step") as info:
         load_record(_write(tmp_path, "r.csv", text))
     assert "0.045" in str(info.value)
@@ -222,7 +226,9 @@ def test_a_slowly_drifting_clock_is_refused(tmp_path):
         load_record(_write(tmp_path, "r.csv", text))
 
 
-@pytest.mark.parametrize(("times", "line"), [([0.0, 0.01, 0.01] + [0.02 + 0.01 * i for i in range(10)], 4), ([0.0, 0.01, 0.005], 4)])
+@pytest.mark.parametrize(
+    ("times", "line"), [([0.0, 0.01, 0.01] + [0.02 + 0.01 * i for i in range(10)], 4), ([0.0, 0.01, 0.005], 4)]
+)
 def test_repeated_or_decreasing_time_is_refused(tmp_path, times, line):
     text = GOOD_HEADER + "".join(f"{t},0.01\n" for t in times) + "".join(f"{1 + i},0.0\n" for i in range(10))
     with pytest.raises(RecordError, match=rf":{line}: time .* does not advance"):

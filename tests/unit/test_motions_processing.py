@@ -89,7 +89,7 @@ def test_scalar_sample_agrees_with_the_vectorized_state(synthetic):
     motion = process_record(synthetic)
     times = np.r_[-0.5, 0.0, np.random.default_rng(0).uniform(0.0, motion.duration_s, 200), motion.duration_s, 99.0]
     xs, vs, accs = motion.state_at(times)
-    for t, x, v, a in zip(times, xs, vs, accs):
+    for t, x, v, a in zip(times, xs, vs, accs, strict=True):
         assert motion.sample(float(t)) == pytest.approx((x, v, a), rel=1e-12, abs=1e-15)
     assert isinstance(motion.sample(1.0)[0], float)
 

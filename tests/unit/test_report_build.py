@@ -23,7 +23,10 @@ from harness.report.plots import drift_height_px
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 N_STORIES = 3
-META = {"total_weight_N": 39855.0, "record": {"name": "elcentro"}, "stroke_soft_limit_m": 0.04, "stroke_hard_limit_m": 0.05, "force_limit_N": 6000.0}
+META = {
+    "total_weight_N": 39855.0, "record": {"name": "elcentro"}, "stroke_soft_limit_m": 0.04, "stroke_hard_limit_m": 0.05,
+    "force_limit_N": 6000.0,
+}
 
 
 def _signals(scale: float, n: int = 750, controlled: bool = True) -> dict[str, np.ndarray]:
@@ -49,8 +52,10 @@ def _signals(scale: float, n: int = 750, controlled: bool = True) -> dict[str, n
 
 def _simulation(root: Path) -> Path:
     columns = canonical_columns(N_STORIES, timing=False)
-    write_simulation_case(root / "sim", "passive", columns, _signals(1.0, controlled=False), {**META, "controller": "passive", "profile_name": "nceer_4dof"})
-    write_simulation_case(root / "sim", "controlled", columns, _signals(0.5), {**META, "controller": "eq23", "profile_name": "nceer_4dof"})
+    passive = {**META, "controller": "passive", "profile_name": "nceer_4dof"}
+    controlled = {**META, "controller": "eq23", "profile_name": "nceer_4dof"}
+    write_simulation_case(root / "sim", "passive", columns, _signals(1.0, controlled=False), passive)
+    write_simulation_case(root / "sim", "controlled", columns, _signals(0.5), controlled)
     return root / "sim"
 
 
@@ -120,11 +125,13 @@ def test_tables_include_the_pair_and_the_run_against_simulation_comparison(repor
     result, _ = report
     titles = [t.title for t in result.tables]
     assert titles[0] == "Peak responses"
-    assert titles.count("Passive against controlled") == 2  # sim controlled and the dry run, each against the sim passive
+    pairs = [title for title in titles if title.startswith("Passive against controlled: ")]
+    assert len(pairs) == 2  # sim controlled and the dry run, each against the sim passive
     comparison = [t for t in result.tables if t.title.startswith("Comparison")]
     assert len(comparison) == 1
     row = comparison[0].row("drift_1")
-    assert row.values[0] == pytest.approx(0.5 * 1e3 * 0.001 * np.max(np.abs(np.sin(2 * np.pi * 2.3 * np.arange(750) * 0.004))), rel=1e-9)
+    peak_sine = np.max(np.abs(np.sin(2 * np.pi * 2.3 * np.arange(750) * 0.004)))
+    assert row.values[0] == pytest.approx(0.5 * 1e3 * 0.001 * peak_sine, rel=1e-9)
     assert row.values[3] == pytest.approx(10.0, rel=1e-6)  # 0.55 against 0.5
 
 
@@ -179,7 +186,7 @@ def test_each_table_is_also_written_as_csv_with_the_same_numbers(report) -> None
     import csv
 
     result, _ = report
-    assert len(result.table_files) == len(result.tables)
+    assert len(result.table_files) == len(result.tables) + len(result.context)  # peak tables, then the context
     assert result.table_files[0].name == "table_1_peak_responses.csv"
     with open(result.table_files[1], newline="") as handle:
         rows = list(csv.reader(handle))
@@ -188,5 +195,5 @@ def test_each_table_is_also_written_as_csv_with_the_same_numbers(report) -> None
     by_key = {row[1]: row for row in rows[1:]}
     for table_row in table.rows:
         cells = by_key[table_row.key][3:]
-        for cell, value in zip(cells, table_row.values):
+        for cell, value in zip(cells, table_row.values, strict=True):
             assert (cell == "") if value is None else float(cell) == value

@@ -105,10 +105,11 @@ def test_runs_table_has_a_column_per_run_and_hides_absent_quantities(pair) -> No
 
 def test_force_percent_is_absent_without_total_weight(tmp_path: Path) -> None:
     columns = ("t_s", "force_command_N")
-    folder = write_simulation_case(tmp_path, "controlled", columns, {"t_s": np.arange(3.0), "force_command_N": np.array([1.0, -4.0, 2.0])}, {})
+    signals = {"t_s": np.arange(3.0), "force_command_N": np.array([1.0, -4.0, 2.0])}
+    folder = write_simulation_case(tmp_path, "controlled", columns, signals, {})
     run = load_run(folder)
     text = runs_table([run]).to_text()
-    assert "Peak control force" not in text
+    assert "Control force / weight" not in text
 
 
 def test_table_text_lists_every_row_with_its_formatted_value(pair) -> None:
@@ -143,7 +144,8 @@ def test_console_table_rows_labels_and_digits(pair) -> None:
     assert table.cells(drift)[2:] == [f"{1e3 * _peak(passive['drift_1_m']):.3f}",
                                       f"{1e3 * _peak(controlled['drift_1_m']):.3f}", "60.0"]
     assert table.cells(table.row("floor_acceleration_1"))[1] == "m/s²"
-    assert table.cells(table.row("force_percent_weight"))[1:] == ["% weight", "0.00", f"{table.row('force_percent_weight').values[1]:.2f}", "-"]
+    force_row = table.row("force_percent_weight")
+    assert table.cells(force_row)[1:] == ["% weight", "0.00", f"{force_row.values[1]:.2f}", "-"]
     assert table.to_rich().title == "title"
 
 

@@ -1,0 +1,140 @@
+"""Plots of the building's response: peak profiles over height, drift histories, bearing hysteresis.
+
+Where some runs' peaks are far smaller than others' (a controlled eight-story building
+against its passive case), those runs would vanish into the zero line at the common scale:
+the peak profile then uses a logarithmic axis, and the drift plot adds a column with the
+small runs alone, at their own scale.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+from matplotlib.axes import Axes
+
+from harness.peaks import run_peaks
+from harness.recording.reader import RunData
+from harness.report.figure import PlotFile, colours, figure, save, style
+from harness.report.plot_common import PlotOptions, legend, peak_of, record_time, small_runs
+from harness.rowlayout import drift
+
+
+def drift_height_px(n_stories: int) -> int:
+    """Pixel height of the drift plot for ``n_stories`` panels."""
+    return max(420, 190 * n_stories + 90)
+
+
+def peak_profile_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
+    """Peak drift per story and peak absolute acceleration per floor (m/s^2, floor 0 = base mat) over height."""
+    stories = max((run.n_stories for run in runs), default=0)
+    if stories == 0:
+        return None
+    scale, unit = options.drift_scale()
+    profiles = []
+    for run, colour in zip(runs, colours(runs), strict=True):
+        peaks = run_peaks(run)
+        accelerations = np.array((peaks.base_acceleration_m_s2, *peaks.floor_acceleration_m_s2))
+        profiles.append((run, colour, np.array(peaks.drift_m) * scale, accelerations))
+    logarithmic = bool(small_runs([float(np.nanmax(p[2], initial=0.0)) for p in profiles]))
+    with matplotlib.rc_context(style()):
+        fig = figure(520)
+        left, right = fig.subplots(1, 2)
+        for run, colour, drifts, accelerations in profiles:
+            if drifts.size == stories and np.isfinite(drifts).all():
+                left.plot(drifts, range(1, stories + 1), "o-", color=colour, label=run.label)
+            if accelerations.size == stories + 1 and np.isfinite(accelerations).all():
+                right.plot(accelerations, range(0, stories + 1), "s-", color=colour, label=run.label)
+        left.set(xlabel=f"Peak interstory {unit}", ylabel="Story", title="Peak drift per story")
+        left.set_yticks(range(1, stories + 1))
+        right.set(xlabel="Peak absolute acceleration (m/s²)", ylabel="Floor (0 = base mat)")
+        right.set_title("Peak acceleration per floor")
+        right.set_yticks(range(0, stories + 1))
+        for ax in (left, right):
+            if logarithmic:
+                ax.set_xscale("log")
+            else:
+                ax.set_xlim(left=0)
+        if logarithmic:
+            fig.suptitle("Peaks over height (logarithmic axes: the runs' peaks differ by more than a factor of 5)")
+        legend(right)
+        return save(fig, "peak_profile", "Peak drift and absolute acceleration over height", out_dir)
+
+
+def _drift_panels(axes: Sequence[Axes], runs: Sequence[RunData], run_colours: Sequence[str], stories: int,
+                  scale: float) -> None:
+    for panel, story in zip(axes, range(stories, 0, -1), strict=True):
+        for run, colour in zip(runs, run_colours, strict=True):
+            if drift(story) in run.signals:
+                panel.plot(record_time(run), run[drift(story)] * scale, color=colour, lw=1.0, label=run.label)
+        panel.text(0.005, 0.96, f"story {story}", transform=panel.transAxes, va="top", ha="left",
+                   fontweight="bold", bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.5})
+
+
+def drift_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
+    """Interstory drift histories, one panel per story (top story at the top), runs overlaid.
+
+    Runs whose peak drift is more than 5 times below the largest get a second column at their own scale.
+    """
+    stories = max((run.n_stories for run in runs), default=0)
+    if stories == 0:
+        return None
+    scale, unit = options.drift_scale()
+    run_colours = colours(runs)
+    small = small_runs([peak_of(run, [drift(j) for j in range(1, stories + 1)]) for run in runs])
+    with matplotlib.rc_context(style()):
+        fig = figure(drift_height_px(stories))
+        grid = fig.subplots(stories, 2 if small else 1, sharex=True, squeeze=False)
+        _drift_panels(list(grid[:, 0]), runs, run_colours, stories, scale)
+        if small:
+            grid[0, 0].set_title("All runs, one scale")
+            _drift_panels(list(grid[:, 1]), [runs[i] for i in small], [run_colours[i] for i in small], stories, scale)
+            grid[0, 1].set_title("Runs with small drifts, their own scale")
+        legend(grid[0, -1], source=grid[0, 0])
+        for ax in grid[-1, :]:
+            ax.set_xlabel("Time (s)")
+        fig.supylabel(f"Interstory {unit}")
+        fig.suptitle("Interstory drift (story j: floor j minus floor j-1)")
+        return save(fig, "drift", "Interstory drift time histories per story", out_dir)
+
+
+def _hysteresis_source(run: RunData) -> tuple[str, str] | None:
+    """(column, legend text) of the bearing friction force: the model's, else the online estimate."""
+    for column, text in (("friction_force_N", "model friction"), ("friction_estimate_N", "estimated friction")):
+        if run.has(column) and np.isfinite(run[column]).any():
+            return column, text
+    return None
+
+
+def _weight(run: RunData) -> float | None:
+    weight = run.metadata.get("total_weight_N")
+    return float(weight) if isinstance(weight, (int, float)) and weight > 0 else None
+
+
+def hysteresis_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
+    """Bearing hysteresis: friction force over the weight (F/W), or in kN without a weight, against x_b (mm)."""
+    del options
+    usable = []
+    for run, colour in zip(runs, colours(runs), strict=True):
+        source = _hysteresis_source(run)
+        if source is not None and run.has("sliding_displacement_m"):
+            usable.append((run, colour, *source))
+    if not usable:
+        return None
+    normalised = all(_weight(run) for run, *_ in usable)
+    with matplotlib.rc_context(style()):
+        fig = figure(640)
+        ax = fig.subplots()
+        for run, colour, column, text in usable:
+            weight = _weight(run)
+            force = run[column] / weight if normalised and weight else run[column] * 1e-3
+            ax.plot(run["sliding_displacement_m"] * 1e3, force, color=colour, lw=0.8, label=f"{run.label} ({text})")
+        ax.set_xlabel("Sliding displacement x_b (mm)")
+        ax.set_ylabel("Friction force / weight, F/W (-)" if normalised else "Friction force (kN)")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.axvline(0.0, color="k", lw=0.5)
+        legend(ax)
+        ax.set_title("Bearing hysteresis" + (" (F/W: the friction coefficient mobilised)" if normalised else ""))
+        return save(fig, "hysteresis", "Bearing hysteresis against sliding displacement", out_dir)
