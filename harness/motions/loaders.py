@@ -29,6 +29,7 @@ absurd values (beyond :data:`~harness.motions.checks.MAX_ABS_ACCEL_G`).
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -140,6 +141,20 @@ def load_record(path: str | Path, *, accel_unit: str | None = None, name: str | 
         For anything that is not a clean, uniformly sampled accelerogram.
     """
     file = Path(path).expanduser()
+    if file.is_file():  # parsed once per file version: a sweep runs hundreds of cases on a few records
+        stat = file.stat()
+        return _load_record_cached(str(file.resolve()), stat.st_size, stat.st_mtime_ns, accel_unit, name)
+    return _parse_record(file, accel_unit, name)  # raises the clear "not found" error
+
+
+@functools.lru_cache(maxsize=32)
+def _load_record_cached(path: str, size: int, mtime_ns: int, accel_unit: str | None, name: str | None) -> RawRecord:
+    """:func:`_parse_record`, remembered for one version (size, modification time) of a file."""
+    return _parse_record(Path(path), accel_unit, name or Path(path).stem)
+
+
+def _parse_record(file: Path, accel_unit: str | None, name: str | None) -> RawRecord:
+    """Parse ``file`` into a :class:`RawRecord` whose acceleration array is read-only (it may be shared)."""
     lines = _content_lines(_read_text(file))
     unit = normalize_accel_unit(accel_unit) if accel_unit is not None else None
     if file.suffix.lower() == ".at2" or _is_at2(lines):
@@ -149,6 +164,7 @@ def load_record(path: str | Path, *, accel_unit: str | None = None, name: str | 
         dt, values, linenos, stated = _parse_text(lines, file, unit)
     check_samples(values, linenos, file, stated)  # in the file's unit, before a conversion could overflow
     accel = values * accel_factor(stated)
+    accel.flags.writeable = False
     return RawRecord(name=name or file.stem, dt_s=dt, accel_m_s2=accel, source=str(file))
 
 

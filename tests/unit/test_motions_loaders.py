@@ -272,3 +272,17 @@ def test_bad_at2_files(tmp_path, line4, values, unit_line, message):
 def test_at2_with_a_contradicting_unit_argument(tmp_path):
     with pytest.raises(RecordError, match="AT2 files are in g"):
         load_record(_write(tmp_path, "r.AT2", _at2("NPTS=  12, DT= .01", VALUES)), accel_unit="gal")
+
+
+def test_a_file_is_parsed_once_per_version_and_its_samples_are_read_only(tmp_path):
+    """A sweep loads the same record for every case: parse it once, and never let a case change it."""
+    path = _write(tmp_path, "rec.csv", "time (s),acceleration (g)\n" + _rows(VALUES))
+    first, again = load_record(path), load_record(path)
+    assert first is again
+    with pytest.raises(ValueError):
+        first.accel_m_s2[1] = 0.0
+    doubled = [2.0 * v for v in VALUES] + [0.0]
+    path.write_text("time (s),acceleration (g)\n" + _rows(doubled))
+    changed = load_record(path)
+    assert changed is not first
+    np.testing.assert_allclose(changed.accel_m_s2, np.array(doubled) * G_M_S2)

@@ -1,0 +1,109 @@
+"""The records of a study: names, files and folders turned into record files, each with a content digest.
+
+A case hands its record to the simulation as an absolute file path (or ``synthetic:SEED``),
+so a worker on another machine of a cluster reads the same file whatever its own
+``$HARNESS_RECORDS_DIR`` says (the folder must be on a shared file system there). The digest
+(SHA-256 of the file) goes into the case's key: a record file that changes makes its
+cases new, and a rerun simulates them again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+
+from harness.errors import ProfileError, RecordError
+from harness.motions.catalog import RECORD_SUFFIXES, looks_like_path, resolve_record, synthetic_seed
+
+
+@dataclass(frozen=True)
+class StudyRecord:
+    """One record of a study.
+
+    Attributes
+    ----------
+    label : str
+        Its name in the results (``el_centro``, a file's stem, ``synthetic:2``).
+    source : str
+        What the simulation is given: an absolute file path, or ``synthetic[:SEED]``.
+    digest : str
+        SHA-256 of the file's bytes, or the synthetic name.
+    """
+
+    label: str
+    source: str
+    digest: str
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 (hex) of a file's bytes."""
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _from_file(label: str, path: Path) -> StudyRecord:
+    path = path.resolve()
+    return StudyRecord(label, str(path), file_digest(path))
+
+
+def _folder_records(folder: Path) -> list[StudyRecord]:
+    """Every record file of a folder (suffixes of ``harness records``), sorted by name."""
+    files = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in RECORD_SUFFIXES)
+    return [_from_file(p.stem, p) for p in files]
+
+
+def study_records(entries: tuple[str, ...], base_dir: Path, records_dir: Path | None) -> list[StudyRecord]:
+    """The records that ``entries`` name.
+
+    Parameters
+    ----------
+    entries : tuple of str
+        Names (``el_centro``, ``synthetic:3``), record files, or folders (every record file in it).
+    base_dir : Path
+        Relative paths are relative to this (the study file's directory, or the profile's).
+    records_dir : Path, optional
+        Where names are looked up (as ``--records-dir``).
+
+    Raises
+    ------
+    RecordError
+        For an entry that names no record, with what was looked for (the caller adds the key).
+    """
+    found: list[StudyRecord] = []
+    for entry in entries:
+        if synthetic_seed(entry) is not None:
+            found.append(StudyRecord(entry.strip(), entry.strip(), entry.strip()))
+            continue
+        path = Path(entry).expanduser()
+        path = path if path.is_absolute() else base_dir / path
+        if path.is_dir():
+            in_folder = _folder_records(path)
+            if not in_folder:
+                raise RecordError(f"folder {path} holds no record file ({', '.join(RECORD_SUFFIXES)})")
+            found.extend(in_folder)
+        elif path.is_file() or looks_like_path(entry):
+            found.append(_from_file(path.stem, resolve_record(str(path), records_dir)))
+        else:
+            found.append(_from_file(entry, resolve_record(entry, records_dir)))
+    return found
+
+
+def checked_records(
+    entries: tuple[str, ...], base_dir: Path, records_dir: Path | None, source: str, key: str
+) -> list[StudyRecord]:
+    """:func:`study_records`, each problem refused as a :class:`ProfileError` of the study file at ``key``."""
+    records = []
+    for i, entry in enumerate(entries):
+        try:
+            records.extend(study_records((entry,), base_dir, records_dir))
+        except RecordError as err:
+            raise ProfileError(f"found {entry!r}: {err}", source, f"{key}[{i}]") from err
+    labels = [record.label for record in records]
+    repeated = sorted({label for label in labels if labels.count(label) > 1})
+    if repeated:
+        raise ProfileError(f"record {repeated[0]!r} is named twice; expected each record once", source, key)
+    return records

@@ -1,0 +1,149 @@
+"""The study file of ``harness sweep``: validated like a profile, expanded into keyed cases."""
+
+from __future__ import annotations
+
+import re
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harness.errors import ProfileError
+from harness.sweep.cases import expand
+from harness.sweep.distributions import LogNormal, Normal, Uniform, draw, unit_samples
+from harness.sweep.study import load_study
+from tests.conftest import PROFILES
+
+BASE = f"""\
+name: small
+profile: {PROFILES / "eight_story.yaml"}
+options: {{duration_s: 2}}
+axes:
+  records: ["synthetic:1", "synthetic:2"]
+  pga_g: [0.1, 0.2]
+  controllers: [FSF-I, OF-I]
+  set: {{control.design_stiffness_scale: [0.7, 1.3]}}
+monte_carlo:
+  samples: 3
+  seed: 7
+  set: {{bearing.mu_max: {{kind: uniform, low: 0.05, high: 0.12}}}}
+  scale: {{structure.story_stiffness_N_per_m: {{kind: normal, mean: 1.0, std: 0.1, low: 0.7, high: 1.3}}}}
+"""
+
+
+def _study_file(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "study.yaml"
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def _refused(tmp_path: Path, text: str) -> ProfileError:
+    path = _study_file(tmp_path, text)
+    with pytest.raises(ProfileError) as caught:
+        expand(load_study(path))
+    assert caught.value.source is not None and Path(caught.value.source).name == "study.yaml"
+    return caught.value
+
+
+def test_a_study_expands_into_the_product_of_its_axes(tmp_path):
+    cases = expand(load_study(_study_file(tmp_path, BASE)))
+    assert len(cases) == 2 * 2 * 2 * 2 * 3
+    assert len({case.key for case in cases}) == len(cases), "every case has its own key"
+    first = cases[0]
+    assert first.record.label == "synthetic:1" and first.pga_g == 0.1 and first.controller == "FSF-I"
+    inputs = dict(first.inputs)
+    assert inputs["control.design_stiffness_scale"] == 0.7 and inputs["sample"] == 0
+    assert 0.05 <= inputs["bearing.mu_max"] <= 0.12 and 0.7 <= inputs["scale:structure.story_stiffness_N_per_m"] <= 1.3
+    assert dict(first.options) == {"duration_s": 2.0}
+
+
+def test_keys_depend_on_the_inputs_only(tmp_path):
+    once = [case.key for case in expand(load_study(_study_file(tmp_path, BASE)))]
+    again = [case.key for case in expand(load_study(_study_file(tmp_path, BASE)))]
+    assert once == again
+    other_seed = [case.key for case in expand(load_study(_study_file(tmp_path, BASE.replace("seed: 7", "seed: 8"))))]
+    assert not set(once) & set(other_seed)
+    longer = [case.key for case in expand(load_study(_study_file(tmp_path, BASE.replace("duration_s: 2", "duration_s: 3"))))]
+    assert not set(once) & set(longer)
+
+
+def test_pga_levels_give_an_evenly_spaced_range(tmp_path):
+    text = BASE.replace("pga_g: [0.1, 0.2]", "pga_levels: {start_g: 0.1, stop_g: 0.4, count: 4}")
+    cases = expand(load_study(_study_file(tmp_path, text)))
+    assert sorted({case.pga_g for case in cases}) == [0.1, 0.2, 0.3, 0.4]
+
+
+@pytest.mark.parametrize(
+    ("change", "key", "message"),
+    [
+        (("  pga_g: [0.1, 0.2]", "  pga_g: [0.1, 0.2]\n  pga: [0.3]"), "axes.pga",
+         r"unknown key 'pga' \(did you mean pga_g, pga_levels\?\)"),
+        (("  pga_g: [0.1, 0.2]", "  pga_g: [0.1, 20]"), r"axes.pga_g[1]", r"found 20, expected a value > 0 and <= 10 g"),
+        (("  pga_g: [0.1, 0.2]", '  pga_g: ["0.1 m"]'), r"axes.pga_g[0]", r"found '0.1 m'"),
+        (("duration_s: 2", "duration_s: -1"), "options.duration_s", r"found -1, expected a value > 0"),
+        (("samples: 3", "samples: 0"), "monte_carlo.samples", r"found 0, expected a value >= 1"),
+        (("kind: uniform", "kind: triangular"), "monte_carlo.set.bearing.mu_max",
+         r"found kind 'triangular', expected kind one of"),
+        (("low: 0.05, high: 0.12", "low: 0.12, high: 0.05"), "monte_carlo.set.bearing.mu_max", r"expected low < high"),
+    ],
+)
+def test_the_schema_refuses_with_file_key_found_and_expected(tmp_path, change, key, message):
+    err = _refused(tmp_path, BASE.replace(*change))
+    assert err.key_path == key
+    assert re.search(message, err.detail), err.detail
+
+
+@pytest.mark.parametrize(
+    ("change", "key", "message"),
+    [
+        (("control.design_stiffness_scale: [0.7, 1.3]", "bearing.mu_delta: [0.01, -0.2]"), "axes.set.bearing.mu_delta[1]",
+         r"^found -0.2, expected a value >= 0 .*\(bearing.mu_delta of eight_story.yaml\)"),
+        (("control.design_stiffness_scale: [0.7, 1.3]", "bearing.mu_max: [0.1]"), "monte_carlo",
+         r"bearing.mu_max is also a grid axis"),
+        (("control.design_stiffness_scale: [0.7, 1.3]", "bearing.a_mu_s_per_m: ['3 kg']"), "axes.set.bearing.a_mu_s_per_m[0]",
+         r"found '3 kg'"),
+        (("control.design_stiffness_scale: [0.7, 1.3]", "bearing.mu_maximum: [0.1]"), "axes.set.bearing.mu_maximum[0]",
+         r"unknown key 'mu_maximum'"),
+        (("controllers: [FSF-I, OF-I]", "controllers: [FSF-I, LQG]"), "axes.controllers[1]",
+         r"found 'LQG', expected a design of the profile \(FSF-I, FSF-II, OF-I, OF-II\) or 'none'"),
+        (('records: ["synthetic:1", "synthetic:2"]', 'records: ["synthetic:1", "no_such_record"]'), "axes.records[1]",
+         r"found 'no_such_record': record 'no_such_record' not found"),
+        (("low: 0.7, high: 1.3", "low: -1.0, high: 1.3"), "monte_carlo",
+         r"sample \d+ \(.*scale:structure.story_stiffness_N_per_m = -?[\d.]+.*expected a value > 0"),
+        (("control.design_stiffness_scale: [0.7, 1.3]", "control.design_stiffness_scale: [0.7, 0.7]"), "axes",
+         r"same inputs"),
+    ],
+)
+def test_values_the_profile_refuses_are_refused_at_the_study_key(tmp_path, change, key, message):
+    text = BASE.replace(*change)
+    if "low: -1.0" in text:
+        text = text.replace("mean: 1.0, std: 0.1", "mean: 0.0, std: 1.0")
+    err = _refused(tmp_path, text)
+    assert err.key_path == key
+    assert re.search(message, err.detail), err.detail
+
+
+def test_a_missing_or_broken_file_is_refused(tmp_path):
+    with pytest.raises(ProfileError, match="study file not found"):
+        load_study(tmp_path / "absent.yaml")
+    path = _study_file(tmp_path, "name: x\nname: y\nprofile: p.yaml\n")
+    with pytest.raises(ProfileError, match="duplicate key 'name'"):
+        load_study(path)
+
+
+def test_latin_hypercube_samples_fill_every_stratum():
+    points = unit_samples(10, 2, seed=3, sampling="latin_hypercube")
+    for column in points.T:
+        assert sorted(np.floor(column * 10).astype(int)) == list(range(10))
+    assert np.array_equal(points, unit_samples(10, 2, seed=3, sampling="latin_hypercube"))
+
+
+def test_distributions_map_probabilities_to_values():
+    values = draw([Uniform("uniform", 0.05, 0.12), Normal("normal", 1.0, 0.1, 0.8, 1.2), LogNormal("lognormal", 2.0, 0.3)],
+                  2000, seed=1, sampling="random")
+    assert values.shape == (2000, 3)
+    assert values[:, 0].min() >= 0.05 and values[:, 0].max() <= 0.12
+    assert values[:, 1].min() >= 0.8 and values[:, 1].max() <= 1.2
+    assert abs(np.mean(values[:, 1]) - 1.0) < 0.01
+    assert abs(np.median(values[:, 2]) - 2.0) < 0.1
