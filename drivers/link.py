@@ -64,6 +64,22 @@ def prepare(
     return protocol, load
 
 
+def _checked_bus(
+    interface: str,
+    channel: str,
+    bitrate_bps: int,
+    rates_hz: Mapping[str, float],
+    max_bus_load: float,
+    protocol_version: int,
+    dbc_path: str | Path | None,
+) -> tuple[can.BusABC, Protocol, BusLoad, BusHealth]:
+    """What both sides do before their reader and writer: :func:`prepare`, then open the bus, with a fresh health."""
+    protocol, load = prepare(
+        rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path
+    )
+    return open_bus(interface, channel, bitrate_bps), protocol, load, BusHealth()
+
+
 @dataclass
 class _Link:
     """An open bus with its protocol, bus load and health; closes the bus on exit."""
@@ -138,11 +154,9 @@ def open_harness(
     BusError
         The bus cannot be opened (says how to fix it).
     """
-    protocol, load = prepare(
-        rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path
+    bus, protocol, load, health = _checked_bus(
+        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path
     )
-    bus = open_bus(interface, channel, bitrate_bps)
-    health = BusHealth()
     reader = HarnessReader(bus, protocol, health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames_per_poll)
     return HarnessLink(bus, protocol, load, health, reader, HarnessWriter(bus, protocol, health))
 
@@ -160,10 +174,8 @@ def open_rig(
     max_frames_per_poll: int = 256,
 ) -> RigLink:
     """Check the settings, then open the bus for the rig side (the virtual rig); parameters as :func:`open_harness`."""
-    protocol, load = prepare(
-        rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path
+    bus, protocol, load, health = _checked_bus(
+        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path
     )
-    bus = open_bus(interface, channel, bitrate_bps)
-    health = BusHealth()
     reader = RigReader(bus, protocol, health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames_per_poll)
     return RigLink(bus, protocol, load, health, reader, RigWriter(bus, protocol, health))
