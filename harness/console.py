@@ -19,7 +19,6 @@ import os
 import signal
 import subprocess
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rich.console import Console
@@ -29,6 +28,7 @@ from rich.text import Text
 
 from drivers.protocol_values import FaultCode
 from harness.loop.status import LoopStatus
+from harness.paths import PROJECT_ROOT
 
 if TYPE_CHECKING:
     from harness.loop.timing import TimingStats
@@ -40,7 +40,6 @@ CHILD_EXIT_TIMEOUT_S = 2.0
 REFRESH_HZ = 4.0
 #: Width of the stroke and force bars (characters): the panel fits an 80-column terminal.
 BAR_WIDTH = 21
-_PROJECT_ROOT = Path(__file__).resolve().parent.parent
 
 
 def stroke_bar(stroke_m: float, soft_m: float, hard_m: float, width: int = 41) -> Text:
@@ -234,7 +233,7 @@ def view_command(status_path: str, soft_limit_m: float, hard_limit_m: float, for
 def view_environment() -> dict[str, str]:
     """The child's environment: this one, with this checkout first on ``PYTHONPATH``."""
     env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(_PROJECT_ROOT), env.get("PYTHONPATH"))))
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(PROJECT_ROOT), env.get("PYTHONPATH"))))
     return env
 
 

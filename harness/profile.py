@@ -42,13 +42,13 @@ from harness.loop.config import LoopConfig
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
 from harness.motions import RecordConfig, TableLimits
+from harness.paths import PROFILE_DIR
 from harness.rig.config import RigConfig
 from harness.safety.config import SafetyConfig, check_config
 from harness.safety.weakening import Weakening, weakenings
 from harness.schema import build, internal, quantity, to_data
 from harness.yamlload import DuplicateKeyError, load_unique
 
-PROFILE_DIR = Path(__file__).resolve().parent.parent / "profiles"
 DEFAULT_PROFILE = PROFILE_DIR / "nceer_4dof.yaml"
 _MAX_FILE_BYTES = 1_000_000
 

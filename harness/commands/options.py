@@ -105,7 +105,7 @@ def shipped_profile(text: str) -> Path | None:
     """The shipped profile ``text`` names, if it names one and is not an existing file itself.
 
     ``eight_story``, ``eight_story.yaml`` and ``profiles/eight_story.yaml`` all name
-    ``<package>/profiles/eight_story.yaml`` (:data:`harness.profile.PROFILE_DIR`), so a
+    ``<package>/profiles/eight_story.yaml`` (:data:`harness.paths.PROFILE_DIR`), so a
     shipped profile is found by its name from any folder. Any other path is left alone.
 
     Parameters
@@ -118,7 +118,7 @@ def shipped_profile(text: str) -> Path | None:
     Path or None
         The shipped file, or None (``text`` is an existing file, or names no shipped profile).
     """
-    from harness.profile import PROFILE_DIR
+    from harness.paths import PROFILE_DIR
 
     given = Path(text).expanduser()
     if given.is_file() or given.parent.name not in ("", PROFILE_DIR.name) or len(given.parts) > 2:

@@ -76,7 +76,7 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from pathlib import Path
 
-    from harness.runs.dry_run import LOG_DIR
+    from harness.paths import LOG_DIR
     from harness.runs.session import SessionSettings, run_session
     from harness.runs.simulate import motion_facts, prepare_motion, resolve_profile
 
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
             console.print("not armed")
             return exit_codes.INPUT_ERROR
     settings = SessionSettings(
-        kind="run", can=can, rate_hz=rate, duration_s=motion.duration_s, controller=controller,
+        kind="run", can=can, duration_s=motion.duration_s,
         log_dir=Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
         metadata={"record": motion_facts(motion), "table_link": "can" if table_link is not None else "none"},
     )

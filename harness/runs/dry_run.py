@@ -33,6 +33,7 @@ from harness.loop.tick import ControlTick
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
 from harness.motions import GroundMotion
+from harness.paths import LOG_DIR
 from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.recording import load_run
@@ -52,7 +53,6 @@ from harness.simulation.twin import run_rig_twin
 PRIVATE_BUS_INTERFACE = "seqpacket"
 RIG_APPEAR_TIMEOUT_S = 60.0
 IN_PROCESS_SWITCH_INTERVAL_S = 2e-4
-LOG_DIR = Path(__file__).resolve().parent.parent / "logs"
 
 
 @dataclass(frozen=True)
@@ -232,9 +232,8 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     if can.interface == PRIVATE_BUS_INTERFACE and not options.external_rig:
         # a private bus per dry run: two dry runs at once (or a test suite) never meet
         can = dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}")
-    controller = profile.control.controller
     settings = SessionSettings(
-        kind="dry-run", can=can, rate_hz=rate_hz, duration_s=motion.duration_s, controller=controller,
+        kind="dry-run", can=can, duration_s=motion.duration_s,
         log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
         show_console=options.show_console,
         metadata={"record": motion_facts(motion)},
@@ -270,7 +269,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     passive = twin = None
     span = record_span_s(session, motion)
     if options.compare:
-        passive, twin = simulated_twins(profile, motion, rate_hz, controller, options.lockstep, span)
+        passive, twin = simulated_twins(profile, motion, rate_hz, profile.control.controller, options.lockstep, span)
     write_dry_run_context(session.run_path, motion, passive, twin, span, options.lockstep)  # for `harness report`
     return DryRunResult(session, profile, peaks, passive, twin, motion, span)
 

@@ -39,13 +39,19 @@ OUTCOME_EXIT = {"completed": exit_codes.OK, "tripped": exit_codes.TRIPPED, "stop
 
 @dataclass
 class SessionSettings:
-    """How one session runs (the command line's choices, resolved)."""
+    """How one session runs, besides the resolved profile (which gives the rate and the controller).
+
+    Attributes
+    ----------
+    can : CanConfig
+        The profile's can section with the command line's interface and channel.
+    duration_s : float
+        Record time the run covers (s).
+    """
 
     kind: RunKind
     can: CanConfig
-    rate_hz: float
     duration_s: float
-    controller: str
     log_dir: Path
     lockstep: bool = False
     show_console: bool = True
@@ -101,8 +107,8 @@ def bus_statistics(link) -> dict:
 def _metadata(profile: Profile, settings: SessionSettings) -> dict:
     stroke, force = profile.safety.stroke, profile.safety.force
     return {
-        "controller": settings.controller,
-        "rate_hz": settings.rate_hz,
+        "controller": profile.control.controller,
+        "rate_hz": profile.control.rate_hz,
         "lockstep": settings.lockstep,
         "can": {"interface": settings.can.interface, "channel": settings.can.channel, "bitrate_bps": settings.can.bitrate_bps},
         "total_weight_N": profile.structure.total_weight_N,
@@ -132,7 +138,7 @@ def _note_no_panel(folder, console) -> None:
 def _check_host_timing(profile: Profile, settings: SessionSettings, link, folder, report) -> HostTiming:
     """The pre-flight timing check (harness.loop.preflight); refuses the run, nothing moved, if it fails."""
     timing = measure_host_timing(
-        settings.rate_hz, profile.safety.run.max_stall_s, profile.loop.spin_s,
+        profile.control.rate_hz, profile.safety.run.max_stall_s, profile.loop.spin_s,
         poll=lambda: link.reader.poll(0.0),  # drain what the rig sends; ages are judged from the loop's first tick
     )
     folder.record_event(None, "timing", "host_timing", timing.summary())
@@ -190,9 +196,9 @@ def run_session(
         raise ProfileError(f"the CAN protocol carries {PROTOCOL_STORIES} stories; this profile has {profile.structure.n_stories}",
                            profile.source_path, "structure")
     warm_up()  # the estimator's kernel must not compile inside the first tick
-    controller = build_controller_for_rig(profile, settings.controller)
+    controller = build_controller_for_rig(profile, profile.control.controller)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
-    supervisor = Supervisor(profile.safety, period_s=1.0 / settings.rate_hz)
+    supervisor = Supervisor(profile.safety, period_s=1.0 / profile.control.rate_hz)
     if table_link is not None:
         on_start, stop_table = table_link.start, table_link.stop
     link = open_harness(settings.can)
@@ -202,8 +208,8 @@ def run_session(
             settings.log_dir, profile.name, settings.kind, profile.resolved_data(), CONTROL_ROW,
             metadata=_metadata(profile, settings),
         ).start()
-        heartbeat_every = max(1, round(settings.rate_hz / settings.can.heartbeat_rate_hz))
-        estop_every = max(1, round(settings.rate_hz / settings.can.estop_rate_hz))
+        heartbeat_every = max(1, round(profile.control.rate_hz / settings.can.heartbeat_rate_hz))
+        estop_every = max(1, round(profile.control.rate_hz / settings.can.estop_rate_hz))
         tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every, estop_every, stop_table)
         if not profile.safety.estop.panel_required:
             _note_no_panel(folder, console)
@@ -216,9 +222,9 @@ def run_session(
         lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None
         status = LoopStatus()
         tick.attach_status(status)  # stories, fault code and event lines for the live console
-        loop = ControlLoop(tick, profile.loop, settings.rate_hz, settings.duration_s, lockstep, on_start, status,
+        loop = ControlLoop(tick, profile.loop, profile.control.rate_hz, settings.duration_s, lockstep, on_start, status,
                            table_running=table_link.running if table_link is not None else None)
-        title = f"{profile.name}: {settings.kind}, {settings.controller} at {settings.rate_hz:g} Hz"
+        title = f"{profile.name}: {settings.kind}, {profile.control.controller} at {profile.control.rate_hz:g} Hz"
         title += " (lockstep)" if lockstep else ""
         alerts = (summary(profile.safety_weakened),) if profile.safety_weakened else ()
         with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,

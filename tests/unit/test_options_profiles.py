@@ -9,7 +9,7 @@ import pytest
 
 from harness.cli import build_parser, main
 from harness.commands.options import profile_path, shipped_profile
-from harness.profile import PROFILE_DIR
+from harness.paths import PROFILE_DIR
 
 
 @pytest.mark.parametrize("typed", ["eight_story", "eight_story.yaml", "profiles/eight_story.yaml"])
