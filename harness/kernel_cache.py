@@ -5,13 +5,28 @@ loads them in about half a second, after an edit of their source (or on a fresh 
 it compiles them, which takes up to a minute. :func:`kernels_cached` asks numba's cache
 index of each kernel, before anything is loaded, whether it holds an entry for the
 kernel's current source (numba keys its index by the source file's time stamp and size).
+
+Numba keys each kernel's cache on its own source file alone, and freezes the globals it
+reads (constants such as :mod:`harness.model.hydraulics`' parameter offsets) and the
+kernels it calls into the compiled code. A change to a callee's file would leave a caller
+compiled against the old one. :func:`drop_stale_kernels` therefore fingerprints every file
+that holds kernels and, when the fingerprint changed, removes their cached code, so every
+kernel compiles again. :mod:`harness.model` calls it when first imported.
 """
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 from collections.abc import Iterable
+from pathlib import Path
 from typing import Any
+
+#: The files that hold numba kernels which call one another (one folder: :mod:`harness.model`).
+KERNEL_DIR = Path(__file__).resolve().parent / "model"
+KERNEL_FILES = ("bearing.py", "hydraulics.py", "integrator.py")
+#: Where the fingerprint of the kernels' sources is kept, beside numba's cache files.
+FINGERPRINT_NAME = "kernel_sources.sha256"
 
 #: The module whose numba dispatchers :func:`harness.model.warmup.warm_up` calls.
 WARMUP_MODULE = "harness.model.warmup"
@@ -40,3 +55,36 @@ def kernels_cached(dispatchers: Iterable[Any] | None = None) -> bool | None:
         return bool(found) and all(_cached(dispatcher) for dispatcher in found)
     except (AttributeError, OSError, EOFError, ValueError, TypeError):
         return None
+
+
+def kernel_fingerprint(directory: Path = KERNEL_DIR, files: Iterable[str] = KERNEL_FILES) -> str:
+    """SHA-256 over the kernels' source files (their names and contents)."""
+    digest = hashlib.sha256()
+    for name in files:
+        digest.update(name.encode())
+        digest.update((directory / name).read_bytes())
+    return digest.hexdigest()
+
+
+def drop_stale_kernels(directory: Path = KERNEL_DIR, files: Iterable[str] = KERNEL_FILES) -> bool:
+    """Remove numba's cached kernels of ``directory`` when its kernels' sources changed.
+
+    Returns True if cached code was removed. Does nothing, quietly, where the cache folder
+    cannot be written (numba then uses its own cache folder, keyed the same way).
+    """
+    files = tuple(files)
+    cache = directory / "__pycache__"
+    stamp = cache / FINGERPRINT_NAME
+    try:
+        fingerprint = kernel_fingerprint(directory, files)
+        if stamp.is_file() and stamp.read_text().strip() == fingerprint:
+            return False
+        stems = tuple(Path(name).stem + "." for name in files)
+        stale = [path for path in cache.glob("*.nb[ic]") if path.name.startswith(stems)] if cache.is_dir() else []
+        for path in stale:
+            path.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        stamp.write_text(fingerprint + "\n")
+        return bool(stale)
+    except OSError:
+        return False

@@ -41,6 +41,9 @@ _BASE_UNITS: dict[str, tuple[float, tuple[int, int, int]]] = {
     "kPa": (1e3, (1, -1, -2)),
     "MPa": (1e6, (1, -1, -2)),
     "bar": (1e5, (1, -1, -2)),
+    "GPa": (1e9, (1, -1, -2)),
+    "psi": (6894.757293168, (1, -1, -2)),
+    "L": (1e-3, (0, 3, 0)),
 }
 
 _TOKEN = re.compile(r"^([A-Za-zµ1]+)(?:\^?(-?\d+))?$")

@@ -20,7 +20,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from harness.model import hydraulics as hy
 from harness.model.bearing import friction_force, hysteretic_rate
+
+#: The first step from a reset state (s). Long enough to cost nothing, short enough that a
+#: state started far from equilibrium (the table already sliding fast under the base mat)
+#: cannot overflow nu in one trial step, where the error test, relative to the overflowed
+#: value, would accept it.
+_FIRST_STEP_S = 1e-4
 
 # Dormand-Prince 5(4) tableau.
 _C2, _C3, _C4, _C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
@@ -62,6 +69,19 @@ def table_state(t: float, accel: np.ndarray, velocity: np.ndarray, displacement:
 
 
 @numba.njit(cache=True, nogil=True)
+def table_drive(t: float, accel: np.ndarray, velocity: np.ndarray, displacement: np.ndarray, dt: float):
+    """Drive displacement, velocity and acceleration at ``t`` (the rule of :func:`table_state`)."""
+    x, v = table_state(t, accel, velocity, displacement, dt)
+    last = accel.shape[0] - 1
+    if t <= 0.0:
+        return x, v, accel[0]
+    k = int(t / dt)
+    if k >= last:
+        return x, v, 0.0
+    return x, v, accel[k] + (accel[k + 1] - accel[k]) * (t - k * dt) / dt
+
+
+@numba.njit(cache=True, nogil=True)
 def derivative(
     t: float,
     y: np.ndarray,
@@ -75,19 +95,86 @@ def derivative(
     velocity: np.ndarray,
     displacement: np.ndarray,
     record_dt: float,
+    rig: np.ndarray,
 ) -> None:
-    """``out = dy/dt`` for ``y = (Z, nu)`` (Eq. 3-7), actuator force ``u`` (N)."""
+    """``out = dy/dt`` for ``y = (Z, nu[, rig states])`` (Eq. 3-7).
+
+    With an empty ``rig`` the table follows the record exactly and ``u`` is the actuator
+    force (N). Otherwise ``rig`` is :func:`harness.model.hydraulics.pack_rig`'s array, ``y``
+    carries the rig's states after ``nu`` and, with a servo-hydraulic actuator, ``u`` is
+    the force command (N) of its force loop.
+    """
     size: int = a_matrix.shape[0]  # numpy's stubs give shape entries no type
-    x0, v0 = table_state(t, accel, velocity, displacement, record_dt)
+    coupled = rig.shape[0] > 0
+    first = size + 1
+    if coupled and rig[hy.TABLE_DYNAMIC] > 0.0:
+        x0, v0 = y[first + hy.TABLE_X], y[first + hy.TABLE_V]
+    else:
+        x0, v0 = table_state(t, accel, velocity, displacement, record_dt)
     sliding_velocity = y[size - 1] - v0
     nu = y[size]
-    force = u - friction_force(sliding_velocity, nu, bearing) + restoring_stiffness * x0
+    friction = friction_force(sliding_velocity, nu, bearing)
+    actuator_force = u
+    if coupled and rig[hy.ACTUATOR_HYDRAULIC] > 0.0:
+        actuator_force = rig[hy.ACTUATOR_CYLINDER + hy.AREA] * y[first + hy.ACTUATOR_PRESSURE]
+    force = actuator_force - friction + restoring_stiffness * x0
     for i in range(size):
         acc = 0.0
         for j in range(size):
             acc += a_matrix[i, j] * y[j]
         out[i] = acc + b_vector[i] * force
     out[size] = hysteretic_rate(sliding_velocity, nu, bearing)
+    if coupled:
+        reaction = restoring_stiffness * (y[size // 2 - 1] - x0) + friction - actuator_force
+        _rig_rates(t, y, out, size, u, reaction, x0, v0, sliding_velocity, rig, accel, velocity, displacement, record_dt)
+
+
+@numba.njit(cache=True, nogil=True)
+def _rig_rates(
+    t: float, y: np.ndarray, out: np.ndarray, size: int, u: float, reaction: float, x0: float, v0: float,
+    sliding_velocity: float, rig: np.ndarray, accel: np.ndarray, velocity: np.ndarray, displacement: np.ndarray,
+    record_dt: float,
+) -> None:
+    """Rates of the rig's states, and the pinned base mat (SPEC 7a, 7b).
+
+    ``reaction`` is what the payload puts on the table: springs, bearing friction and the
+    control actuator's reaction, ``k_b x_b + f - u`` (N).
+    """
+    first = size + 1
+    if rig[hy.ACTUATOR_HYDRAULIC] > 0.0:
+        if rig[hy.ENABLED] > 0.0:
+            area = rig[hy.ACTUATOR_CYLINDER + hy.AREA]
+            current = rig[hy.ACTUATOR_GAIN] * (u - area * y[first + hy.ACTUATOR_PRESSURE])
+            bypass = 0.0
+        else:
+            current, bypass = 0.0, rig[hy.ACTUATOR_BYPASS]
+        hy.cylinder_rates(y, out, first + hy.ACTUATOR_PRESSURE, current, sliding_velocity, bypass, rig, hy.ACTUATOR_CYLINDER)
+    else:
+        for k in range(3):
+            out[first + hy.ACTUATOR_PRESSURE + k] = 0.0
+    x_d, v_d, a_d = table_drive(t, accel, velocity, displacement, record_dt)
+    table_acceleration = a_d
+    if rig[hy.TABLE_DYNAMIC] > 0.0:
+        mass, area = rig[hy.TABLE_MASS], rig[hy.TABLE_CYLINDER + hy.AREA]
+        pressure = y[first + hy.TABLE_PRESSURE]
+        table_acceleration = (area * pressure + reaction) / mass
+        flow = area * (v_d + rig[hy.TABLE_POSITION_GAIN] * (x_d - x0)) - rig[hy.TABLE_PRESSURE_FEEDBACK] * (
+            pressure - mass * a_d / area
+        )
+        current = flow / rig[hy.TABLE_CYLINDER + hy.VALVE_FLOW]
+        hy.cylinder_rates(y, out, first + hy.TABLE_PRESSURE, current, v0, 0.0, rig, hy.TABLE_CYLINDER)
+    else:
+        for k in range(3):
+            out[first + hy.TABLE_PRESSURE + k] = 0.0
+    if rig[hy.BASE_PINNED] > 0.0:
+        base_acceleration = out[size - 1]
+        if rig[hy.TABLE_DYNAMIC] > 0.0:  # platform and base mat move as one: the internal forces cancel
+            mass = rig[hy.TABLE_MASS]
+            table_acceleration = (mass * table_acceleration + rig[hy.BASE_MASS] * base_acceleration) / (mass + rig[hy.BASE_MASS])
+        out[size - 1] = table_acceleration
+        out[size // 2] += base_acceleration - table_acceleration  # xddot_1 = a_1 - yddot_b
+    out[first + hy.TABLE_X] = v0
+    out[first + hy.TABLE_V] = table_acceleration
 
 
 @numba.njit(cache=True, nogil=True)
@@ -107,6 +194,7 @@ def advance(
     atol: np.ndarray,
     rtol: float,
     work: np.ndarray,
+    rig: np.ndarray,
 ) -> int:
     """Integrate ``y`` in place from ``t0`` to ``t1`` with the actuator force held at ``u``.
 
@@ -129,8 +217,10 @@ def advance(
         Absolute tolerance per component.
     rtol : float
         Relative tolerance.
-    work : ndarray (9 * (N + 1) + 1,)
+    work : ndarray (9 * len(y) + 1,)
         Scratch space; ``work[0]`` carries the last accepted step size between calls.
+    rig : ndarray
+        The rig's packed parameters (:func:`harness.model.hydraulics.pack_rig`), or empty.
 
     Returns
     -------
@@ -149,10 +239,10 @@ def advance(
     ynew = work[1 + 8 * n : 1 + 9 * n]
     t = t0
     h = work[0]
-    if h <= 0.0:
-        h = t1 - t0
+    if h <= 0.0:  # the first call from rest: a short first step, which the controller then grows
+        h = min(t1 - t0, _FIRST_STEP_S)
     accepted = 0
-    derivative(t, y, k1, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt)
+    derivative(t, y, k1, u, a_matrix, b_vector, restoring_stiffness, bearing, accel, velocity, displacement, record_dt, rig)
     while t < t1:
         remaining = t1 - t
         truncated = h >= remaining
@@ -161,43 +251,43 @@ def advance(
             ytmp[i] = y[i] + step * _A21 * k1[i]
         derivative(
             t + _C2 * step, ytmp, k2, u, a_matrix, b_vector, restoring_stiffness, bearing,
-            accel, velocity, displacement, record_dt,
+            accel, velocity, displacement, record_dt, rig,
         )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A31 * k1[i] + _A32 * k2[i])
         derivative(
             t + _C3 * step, ytmp, k3, u, a_matrix, b_vector, restoring_stiffness, bearing,
-            accel, velocity, displacement, record_dt,
+            accel, velocity, displacement, record_dt, rig,
         )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A41 * k1[i] + _A42 * k2[i] + _A43 * k3[i])
         derivative(
             t + _C4 * step, ytmp, k4, u, a_matrix, b_vector, restoring_stiffness, bearing,
-            accel, velocity, displacement, record_dt,
+            accel, velocity, displacement, record_dt, rig,
         )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A51 * k1[i] + _A52 * k2[i] + _A53 * k3[i] + _A54 * k4[i])
         derivative(
             t + _C5 * step, ytmp, k5, u, a_matrix, b_vector, restoring_stiffness, bearing,
-            accel, velocity, displacement, record_dt,
+            accel, velocity, displacement, record_dt, rig,
         )
         for i in range(n):
             ytmp[i] = y[i] + step * (_A61 * k1[i] + _A62 * k2[i] + _A63 * k3[i] + _A64 * k4[i] + _A65 * k5[i])
         derivative(
             t + step, ytmp, k6, u, a_matrix, b_vector, restoring_stiffness, bearing,
-            accel, velocity, displacement, record_dt,
+            accel, velocity, displacement, record_dt, rig,
         )
         for i in range(n):
             ynew[i] = y[i] + step * (_B1 * k1[i] + _B3 * k3[i] + _B4 * k4[i] + _B5 * k5[i] + _B6 * k6[i])
         derivative(
             t + step, ynew, k7, u, a_matrix, b_vector, restoring_stiffness, bearing,
-            accel, velocity, displacement, record_dt,
+            accel, velocity, displacement, record_dt, rig,
         )
         error = 0.0
         for i in range(n):
             e = step * (_E1 * k1[i] + _E3 * k3[i] + _E4 * k4[i] + _E5 * k5[i] + _E6 * k6[i] + _E7 * k7[i])
             ratio = abs(e) / (atol[i] + rtol * max(abs(y[i]), abs(ynew[i])))
-            if ratio > error:
+            if not ratio <= error:  # a NaN (a trial step that overflowed) counts as the largest error
                 error = ratio
         if error <= 1.0:
             t = t1 if truncated else t + step
@@ -207,8 +297,8 @@ def advance(
             accepted += 1
             proposal = step * (5.0 if error == 0.0 else min(5.0, 0.9 * error ** -0.2))
             h = max(h, proposal) if truncated else proposal
-        else:
-            h = step * max(0.2, 0.9 * error ** -0.2)
+        else:  # rejected; a NaN or infinite error (an overflowed trial step) shrinks the step the most
+            h = step * (max(0.2, 0.9 * error ** -0.2) if error < 1e30 else 0.2)
             if h < 1e-14 * max(1.0, abs(t)):
                 raise RuntimeError("integration step size underflow")
     work[0] = h

@@ -12,6 +12,7 @@ import numpy as np
 
 from drivers.measurements import Measurements
 from harness import rowlayout as layout
+from harness.model import hydraulics as hy
 from harness.model.bearing import BearingConfig, friction_force
 from harness.model.building import (
     BuildingConfig,
@@ -19,7 +20,7 @@ from harness.model.building import (
     acceleration_maps,
     state_space,
 )
-from harness.model.integrator import advance, default_atol, make_work, table_state
+from harness.model.integrator import advance, default_atol, derivative, make_work, table_drive, table_state
 
 
 @dataclass(frozen=True)
@@ -81,44 +82,99 @@ class TableMotion:
 
 
 class Plant:
-    """Building on friction bearings on a moving table; state ``y = (Z, nu)``.
+    """Building on friction bearings on a moving table; state ``y = (Z, nu[, rig states])``.
 
     Parameters
     ----------
     building : BuildingConfig
     bearing : BearingConfig
     table : TableMotion
+        The table's motion, or with a servo-hydraulic table the drive its servo loop tracks.
     rtol : float
         Relative tolerance of the kernel (absolute tolerances scale with it).
+    rig_params : ndarray, optional
+        The rig's hydraulics (:func:`harness.model.hydraulics.pack_rig`); the state then
+        carries the table's and the cylinders' states after ``nu`` (SPEC 7a, 7b). An array
+        shared between plants (the rig's held and record plants) shares its enable flag.
     """
 
-    def __init__(self, building: BuildingConfig, bearing: BearingConfig, table: TableMotion, rtol: float = 1e-6):
+    def __init__(
+        self, building: BuildingConfig, bearing: BearingConfig, table: TableMotion, rtol: float = 1e-6,
+        rig_params: np.ndarray | None = None,
+    ):
         self.building = building
         self.bearing = bearing
         self.table = table
         self.model: StateSpace = state_space(building)
         self.bearing_params = bearing.packed(building.total_weight_N)
         self.rtol = float(rtol)
-        self.atol = default_atol(building.n_stories) * (self.rtol / 1e-6)
-        self.y = np.zeros(self.model.size + 1)
-        self._work = make_work(self.model.size + 1)
+        self.rig_params = np.zeros(0) if rig_params is None else rig_params
+        self.coupled = self.rig_params.size > 0
+        #: Index of nu in the state; the rig's states follow it.
+        self.i_nu = self.model.size
+        atol = default_atol(building.n_stories)
+        if self.coupled:
+            atol = np.concatenate((atol, hy.rig_atol()))
+        self.atol = atol * (self.rtol / 1e-6)
+        self.y = np.zeros(atol.size)
+        self._work = make_work(atol.size)
+        self._rates = np.zeros(atol.size)
         self.steps = 0
         m, t = self.model, table
-        self._kernel_args = (
+        self._table_args = (
             m.A, m.B, m.restoring_stiffness_N_per_m, self.bearing_params,
-            t.accel_m_s2, t.velocity_m_s, t.displacement_m, t.dt_s, self.atol, self.rtol, self._work,
+            t.accel_m_s2, t.velocity_m_s, t.displacement_m, t.dt_s,
         )
+        self._kernel_args = (*self._table_args, self.atol, self.rtol, self._work, self.rig_params)
+
+    @property
+    def table_dynamic(self) -> bool:
+        """The table is a servo-hydraulic platform whose motion is part of the state."""
+        return self.coupled and self.rig_params[hy.TABLE_DYNAMIC] > 0.0
+
+    @property
+    def actuator_hydraulic(self) -> bool:
+        """The control actuator is servo-hydraulic: its force is part of the state."""
+        return self.coupled and self.rig_params[hy.ACTUATOR_HYDRAULIC] > 0.0
 
     def reset(self) -> None:
-        """Back to rest: all displacements, velocities and nu zero."""
+        """Back to rest: all displacements, velocities, nu and pressures zero; a dynamic table at its drive's start."""
         self.y[:] = 0.0
         self._work[:] = 0.0
         self.steps = 0
+        if self.table_dynamic:
+            self.y[self.i_nu + 1 + hy.TABLE_X] = self.table.state(0.0)[0]
 
     def advance(self, t0: float, t1: float, force_N: float) -> None:
-        """Integrate from ``t0`` to ``t1`` (s) with the actuator force held at ``force_N``."""
+        """Integrate from ``t0`` to ``t1`` (s) with ``force_N`` held: the actuator force, or a
+        servo-hydraulic actuator's force command (N)."""
         if t1 > t0:
             self.steps += advance(self.y, t0, t1, force_N, *self._kernel_args)
+
+    def table_now(self, t: float) -> tuple[float, float]:
+        """Table displacement (m) and velocity (m/s) of the current state at ``t``."""
+        if self.table_dynamic:
+            first = self.i_nu + 1
+            return float(self.y[first + hy.TABLE_X]), float(self.y[first + hy.TABLE_V])
+        return self.table.state(t)
+
+    def actuator_force(self, force_N: float) -> float:
+        """The control actuator's force now (N): ``A p_L`` when servo-hydraulic, else ``force_N``."""
+        if self.actuator_hydraulic:
+            return float(self.rig_params[hy.ACTUATOR_CYLINDER + hy.AREA] * self.y[self.i_nu + 1 + hy.ACTUATOR_PRESSURE])
+        return force_N
+
+    def accelerations(self, t: float, force_N: float) -> tuple[float, float]:
+        """Table and base-mat absolute accelerations (m/s^2) of the current state at ``t``.
+
+        ``force_N`` as in :meth:`advance`. With a motion-source table the table's is the record's.
+        """
+        rates = self._rates
+        derivative(t, self.y, rates, force_N, *self._table_args, self.rig_params)
+        base = float(rates[self.model.i_base_velocity])
+        if self.coupled:
+            return float(rates[self.i_nu + 1 + hy.TABLE_V]), base
+        return float(table_drive(t, *self._table_args[4:])[2]), base
 
     def measure(self, t: float, out: Measurements, table_x: float | None = None, table_v: float | None = None) -> Measurements:
         """Write the exact (noise-free) table and base-mat signals at ``t`` into ``out``.
@@ -133,7 +189,9 @@ class Plant:
     def friction_force(self, t: float, table_v: float | None = None) -> float:
         """The bearing friction force of the current state at ``t`` (N)."""
         v0 = self.table.state(t)[1] if table_v is None else table_v
-        return friction_force(self.y[self.model.i_base_velocity] - v0, self.y[-1], self.bearing_params)
+        if self.table_dynamic:
+            v0 = self.table_now(t)[1]
+        return friction_force(self.y[self.model.i_base_velocity] - v0, self.y[self.i_nu], self.bearing_params)
 
     def responses(self, times: np.ndarray, states: np.ndarray, forces: np.ndarray) -> dict[str, np.ndarray]:
         """Derived time series from sampled states.
@@ -155,21 +213,26 @@ class Plant:
             and velocity, drifts, absolute floor accelerations, friction force, nu.
         """
         m = self.model
-        table_x, table_v = self.table.states(times)
+        if self.coupled:
+            table_x, table_v, table_acc, base_acc = self._rig_motion(times, states, forces)
+        else:
+            table_x, table_v = self.table.states(times)
+            table_acc = self.table.acceleration(times)
         sliding_v = states[:, m.i_base_velocity] - table_v
         params = self.bearing_params
         mu = params[0] - params[1] * np.exp(-params[2] * np.abs(sliding_v))
-        friction = mu * params[3] * states[:, -1]
+        friction = mu * params[3] * states[:, self.i_nu]
         floor_map, base_map = acceleration_maps(self.building)
         z = states[:, : m.size]
-        base_acc = z @ base_map + (m.restoring_stiffness_N_per_m * table_x - friction + forces) / m.base_mass_kg
+        if not self.coupled:
+            base_acc = z @ base_map + (m.restoring_stiffness_N_per_m * table_x - friction + forces) / m.base_mass_kg
         floor_acc = z @ floor_map.T
         stories = range(self.building.n_stories)
         return {
             layout.TIME: times,
             layout.TABLE_DISPLACEMENT: table_x,
             layout.TABLE_VELOCITY: table_v,
-            layout.TABLE_ACCELERATION: self.table.acceleration(times),
+            layout.TABLE_ACCELERATION: table_acc,
             layout.BASE_DISPLACEMENT: states[:, m.i_base_displacement],
             layout.BASE_VELOCITY: states[:, m.i_base_velocity],
             layout.BASE_ACCELERATION: base_acc,
@@ -178,5 +241,19 @@ class Plant:
             **{layout.drift(j + 1): states[:, j] for j in stories},  # Z begins with the drifts, story 1 first
             **{layout.floor_acceleration(j + 1): floor_acc[:, j] for j in stories},
             layout.FRICTION_FORCE: friction,
-            layout.HYSTERETIC_NU: states[:, -1],
+            layout.HYSTERETIC_NU: states[:, self.i_nu],
         }
+
+    def _rig_motion(self, times: np.ndarray, states: np.ndarray, forces: np.ndarray):
+        """Table displacement, velocity, acceleration and base-mat acceleration of sampled coupled states."""
+        count = len(times)
+        table_acc, base_acc = np.empty(count), np.empty(count)
+        rates = self._rates
+        for k in range(count):
+            derivative(float(times[k]), states[k], rates, float(forces[k]), *self._table_args, self.rig_params)
+            table_acc[k], base_acc[k] = rates[self.i_nu + 1 + hy.TABLE_V], rates[self.model.i_base_velocity]
+        if self.table_dynamic:
+            first = self.i_nu + 1
+            return states[:, first + hy.TABLE_X], states[:, first + hy.TABLE_V], table_acc, base_acc
+        table_x, table_v = self.table.states(times)
+        return table_x, table_v, table_acc, base_acc

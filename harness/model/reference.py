@@ -31,7 +31,7 @@ class ReferencePlant(Plant):
         out = np.empty_like(y)
         derivative(
             t, y, out, force_N, m.A, m.B, m.restoring_stiffness_N_per_m, self.bearing_params,
-            table.accel_m_s2, table.velocity_m_s, table.displacement_m, table.dt_s,
+            table.accel_m_s2, table.velocity_m_s, table.displacement_m, table.dt_s, self.rig_params,
         )
         return out
 

@@ -34,6 +34,7 @@ def warm_up() -> bool:
     a_matrix, b_vector = np.zeros((size, size)), np.zeros(size)
     y, out = np.zeros(size + 1), np.zeros(size + 1)
     atol = np.full(size + 1, 1e-9)
+    no_rig = np.zeros(0)
     friction_coefficient(0.0, params)
     friction_force(0.0, 0.0, params)
     hysteretic_rate(0.0, 0.0, params)
@@ -43,8 +44,11 @@ def warm_up() -> bool:
     read_only.flags.writeable = False  # processed records are read-only: numba compiles them apart
     for table in (samples, read_only):
         table_state(0.0, table, table, table, 0.01)
-        derivative(0.0, y, out, 0.0, a_matrix, b_vector, 0.0, params, table, table, table, 0.01)
-        advance(y, 0.0, 1e-3, 0.0, a_matrix, b_vector, 0.0, params, table, table, table, 0.01, atol, 1e-6, make_work(size + 1))
+        derivative(0.0, y, out, 0.0, a_matrix, b_vector, 0.0, params, table, table, table, 0.01, no_rig)
+        advance(
+            y, 0.0, 1e-3, 0.0, a_matrix, b_vector, 0.0, params, table, table, table, 0.01, atol, 1e-6, make_work(size + 1),
+            no_rig,
+        )
     _warm = True
     return True
 

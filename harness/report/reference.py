@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from harness.motions.tracking import Tracking, tracking
 from harness.peaks import Peaks, run_peaks
 from harness.recording.reader import RunData
 from harness.report.peak_table import PeakTable
@@ -105,16 +106,25 @@ def record_start_s(run: RunData) -> float:
     return float(start) if isinstance(start, (int, float)) else 0.0
 
 
-def tracking_error(run: RunData, target: TargetMotion, column: str, target_values: np.ndarray) -> float | None:
-    """RMS of achieved minus target over the record (the column's SI unit); None without overlap."""
+def tracking_error(run: RunData, target: TargetMotion, column: str, target_values: np.ndarray) -> Tracking | None:
+    """Achieved against target over the record (:func:`harness.motions.tracking.tracking`); None without overlap.
+
+    The achieved signal is taken at the run's samples inside the record and resampled to
+    a uniform grid of the run's median step, as is the target.
+    """
     if not run.has(column):
         return None
     t = run["t_s"] - record_start_s(run)
     inside = (t >= target.t_s[0]) & (t <= target.t_s[-1]) & np.isfinite(run[column])
-    if inside.sum() < 2:
+    if inside.sum() < 3:
         return None
-    error = run[column][inside] - np.interp(t[inside], target.t_s, target_values)
-    return float(np.sqrt(np.mean(error**2)))
+    times = t[inside]
+    step = float(np.median(np.diff(times)))
+    if not step > 0.0:
+        return None
+    grid = np.arange(times[0], times[-1] + 0.5 * step, step)
+    achieved = np.interp(grid, times, run[column][inside])
+    return tracking(achieved, np.interp(grid, target.t_s, target_values), step)
 
 
 def _peak(values: np.ndarray) -> float:
@@ -137,17 +147,25 @@ def target_motion_table(runs: Sequence[RunData]) -> TextTable | None:
         ):
             wanted = _peak(values)
             difference = 100.0 * (peak - wanted) / wanted if wanted else float("nan")
-            rms = tracking_error(run, target, column, values)
+            measured = tracking_error(run, target, column, values)
             rows.append((run.label, f"Peak table {name}", unit, f"{wanted * scale:.3f}", f"{peak * scale:.3f}",
-                         f"{difference:+.1f}", "-" if rms is None else f"{rms * scale:.3f}"))
+                         f"{difference:+.1f}", *_tracking_cells(measured, scale)))
     if not rows:
         return None
-    headings = ("Run", "Quantity", "Unit", "Target", "Achieved", "Difference (%)", "RMS error")
-    note = ("Target: the processed record (target_motion.csv); achieved: the table sensors (signals.csv), in record "
-            "time. RMS error of achieved minus target over the record, in the row's unit.")
+    headings = ("Run", "Quantity", "Unit", "Target", "Achieved", "Difference (%)", "RMS error", "Peak error", "Delay (ms)")
+    note = ("Target: the processed record (target_motion.csv, the table's drive); achieved: the table sensors "
+            "(signals.csv), in record time. RMS and peak of achieved minus target over the record, in the row's unit; "
+            "delay: where their cross-correlation peaks (positive: the table lags its drive).")
+    numeric = (False, False, True, True, True, True, True, True)
     if len({row[0] for row in rows}) == 1:  # one run: its label is in the title
         title = f"Table motion: target against achieved: {rows[0][0]}"
-        return TextTable(title, headings[1:], tuple(row[1:] for row in rows), note, key_columns=2,
-                         numeric=(False, False, True, True, True, True))
+        return TextTable(title, headings[1:], tuple(row[1:] for row in rows), note, key_columns=2, numeric=numeric)
     return TextTable("Table motion: target against achieved", headings, tuple(rows), note, key_columns=3,
-                     numeric=(False, False, False, True, True, True, True))
+                     numeric=(False, *numeric))
+
+
+def _tracking_cells(measured: Tracking | None, scale: float) -> tuple[str, str, str]:
+    """RMS error, peak error (scaled to the row's unit) and delay (ms), or dashes."""
+    if measured is None:
+        return "-", "-", "-"
+    return f"{measured.rms_error * scale:.3f}", f"{measured.peak_error * scale:.3f}", f"{measured.delay_s * 1e3:+.2f}"

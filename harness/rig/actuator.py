@@ -13,17 +13,55 @@ on the plant over the coming sub-step:
 Every model then obeys ``|dF/dt| <= force_rate_limit_N_per_s`` and
 ``|F| <= force_limit_N``. When the drive is not enabled the force decays to zero
 with ``decay_time_constant_s`` whatever the model.
+
+``servo_hydraulic`` (:class:`HydraulicActuator`) is not a force source: the cylinder's
+pressure is part of the plant's state (:mod:`harness.model.hydraulics`), so its force
+depends on how the base mat moves. The actuator object then delays the command, limits
+it as the servo controller's command range does, and sets the drive's enable flag that
+the plant's force loop reads.
 """
 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import expm
 
-from harness.rig.config import ActuatorConfig
+from harness.model import hydraulics as hy
+from harness.rig.config import ActuatorConfig, RigConfig
 from harness.rig.grid import half_up
+
+if TYPE_CHECKING:
+    from harness.rig.table import TablePlant
+
+
+class DelayLine:
+    """A transport delay of whole sub-steps.
+
+    Parameters
+    ----------
+    delay_substeps : int
+        The delay, in sub-steps (0: none).
+    """
+
+    def __init__(self, delay_substeps: int):
+        self.delay_substeps = int(delay_substeps)
+        self._line = np.zeros(self.delay_substeps + 1)
+        self._head = 0
+
+    def reset(self) -> None:
+        """Zero the line."""
+        self._line[:] = 0.0
+        self._head = 0
+
+    def push(self, value: float) -> float:
+        """Put ``value`` in; return the value put in ``delay_substeps`` sub-steps ago."""
+        line = self._line
+        self._head = (self._head + 1) % line.size
+        line[self._head] = value
+        return float(line[(self._head - self.delay_substeps) % line.size])
 
 
 class ServoActuator:
@@ -52,22 +90,18 @@ class ServoActuator:
         gamma = np.linalg.solve(a, (phi - np.eye(2)) @ np.array([0.0, w * w]))
         self._phi = tuple(float(v) for v in phi.ravel())
         self._gamma = (float(gamma[0]), float(gamma[1]))
-        self.delay_substeps = half_up(config.delay_s / self.substep_s)
-        self._line = np.zeros(self.delay_substeps + 1)
-        self._head = 0
+        self._delay = DelayLine(half_up(config.delay_s / self.substep_s))
+        self.delay_substeps = self._delay.delay_substeps
 
     def reset(self) -> None:
         """Zero force, rate and delay line."""
         self.force_N = 0.0
         self.rate_N_s = 0.0
-        self._line[:] = 0.0
-        self._head = 0
+        self._delay.reset()
 
-    def _delayed(self, command_N: float) -> float:
-        line = self._line
-        self._head = (self._head + 1) % line.size
-        line[self._head] = command_N
-        return float(line[(self._head - self.delay_substeps) % line.size])
+    def plant_input(self, held_N: float) -> float:
+        """What the plant integrates with over the sub-step: the force held (N)."""
+        return held_N
 
     def _limit(self, previous: float, target: float) -> float:
         step = target - previous
@@ -88,7 +122,7 @@ class ServoActuator:
         enabled : bool
             The drive is enabled (otherwise the force decays to zero).
         """
-        command = self._delayed(command_N)
+        command = self._delay.push(command_N)
         previous = self.force_N
         if not enabled:
             held = previous
@@ -114,3 +148,64 @@ class ServoActuator:
         self.force_N = limited
         self.rate_N_s = rate
         return held
+
+
+class HydraulicActuator:
+    """The servo-hydraulic control actuator: command delay and range, drive enable; force from the plant.
+
+    Parameters
+    ----------
+    config : ActuatorConfig
+        ``model: servo_hydraulic``; ``delay_s`` and ``force_limit_N`` act on the command.
+    substep_s : float
+        Physics sub-step h (s).
+    table : TablePlant
+        The table and plant whose state holds the cylinder (built with this actuator's hydraulics).
+    """
+
+    def __init__(self, config: ActuatorConfig, substep_s: float, table: TablePlant):
+        self.config = config
+        self.substep_s = float(substep_s)
+        self.table = table
+        self._delay = DelayLine(half_up(config.delay_s / self.substep_s))
+        self.delay_substeps = self._delay.delay_substeps
+        self._max_step_N = config.force_rate_limit_N_per_s * self.substep_s
+        self.command_N = 0.0
+
+    def reset(self) -> None:
+        """Zero the command and the delay line (the plant's reset zeroes the pressure)."""
+        self.command_N = 0.0
+        self._delay.reset()
+
+    @property
+    def force_N(self) -> float:
+        """The cylinder's force on the base mat now, ``A p_L`` (N)."""
+        return self.table.live.actuator_force(self.command_N)
+
+    def plant_input(self, held_N: float) -> float:
+        """What the plant integrates with: the force command of the force loop (N)."""
+        return self.command_N
+
+    def substep(self, command_N: float, enabled: bool) -> float:
+        """Take the latest command for the coming sub-step; return the force acting at its start (N).
+
+        The command is delayed by ``delay_s``, rate limited and clamped to ``force_limit_N``
+        (the servo controller's command range); ``enabled`` sets the drive's enable flag.
+        """
+        command = self._delay.push(command_N)
+        step = command - self.command_N
+        if step > self._max_step_N:
+            command = self.command_N + self._max_step_N
+        elif step < -self._max_step_N:
+            command = self.command_N - self._max_step_N
+        limit = self.config.force_limit_N
+        self.command_N = min(max(command, -limit), limit) if enabled else 0.0
+        self.table.rig_params[hy.ENABLED] = 1.0 if enabled else 0.0
+        return self.force_N
+
+
+def make_actuator(config: RigConfig, substep_s: float, table: TablePlant) -> ServoActuator | HydraulicActuator:
+    """The rig's actuator model: a force source, or the servo-hydraulic cylinder in ``table``'s plant."""
+    if config.actuator.model == "servo_hydraulic":
+        return HydraulicActuator(config.actuator, substep_s, table)
+    return ServoActuator(config.actuator, substep_s, config.drive.decay_time_constant_s)

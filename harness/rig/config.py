@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from harness.input_limits import MAX_SEED
+from harness.model.hydraulics import HydraulicActuatorConfig, TableConfig
 from harness.rig.faults import fault_id_for
 from harness.schema import quantity
 
@@ -74,9 +75,15 @@ class SensorsConfig:
 
 @dataclass(frozen=True)
 class ActuatorConfig:
-    """The servo-hydraulic actuator between table and base mat."""
+    """The actuator between table and base mat.
 
-    model: Literal["ideal", "first_order", "second_order"] = quantity("first_order", doc="servo dynamics")
+    ``ideal``, ``first_order`` and ``second_order`` are force sources: the force follows the
+    command whatever the base mat does. ``servo_hydraulic`` is the cylinder of SPEC 7a under
+    its force loop (``hydraulics``): its force bleeds with the sliding velocity (the natural
+    velocity feedback) and saturates with pressure and flow.
+    """
+
+    model: Literal["ideal", "first_order", "second_order", "servo_hydraulic"] = quantity("first_order", doc="servo dynamics")
     time_constant_s: float = quantity(0.01, unit="s", gt=0.0, doc="first-order lag time constant")
     bandwidth_hz: float = quantity(30.0, unit="Hz", gt=0.0, doc="second-order natural frequency")
     damping_ratio: float = quantity(0.7, gt=0.0, le=2.0, doc="second-order damping ratio")
@@ -84,6 +91,7 @@ class ActuatorConfig:
     force_limit_N: float = quantity(20_000.0, unit="N", gt=0.0, le=30_000.0, doc="largest |force| the actuator delivers")
     force_rate_limit_N_per_s: float = quantity(1.0e6, unit="N/s", gt=0.0, doc="largest |dF/dt|")
     force_noise_N: float = quantity(0.0, unit="N", ge=0.0, doc="load-cell noise std in ACTUATOR_STATUS")
+    hydraulics: HydraulicActuatorConfig = field(default_factory=HydraulicActuatorConfig)
 
 
 @dataclass(frozen=True)
@@ -128,5 +136,6 @@ class RigConfig:
     history_s: float = quantity(60.0, unit="s", ge=0.0, le=3600.0, doc="length of the exact history ring")
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     actuator: ActuatorConfig = field(default_factory=ActuatorConfig)
+    table: TableConfig = field(default_factory=TableConfig)
     drive: DriveConfig = field(default_factory=DriveConfig)
     faults: tuple[FaultSpec, ...] = quantity((), doc="scheduled faults")

@@ -5,6 +5,12 @@ on the processed record (while the table plays it, the plant's time is the recor
 time), one on a table held still at ``hold_m`` (before the start, after a stop or
 the end of the record). The state is copied across when the table starts or stops,
 so at any time exactly one of them is live. Both use the compiled kernel.
+
+With ``rig.table.model: servo_hydraulic`` the record is the table's drive: the
+platform's own servo loop tracks it under the payload's reactions, and the achieved
+motion is part of the plant's state (SPEC 7b). With ``rig.actuator.model:
+servo_hydraulic`` the control actuator's cylinder is too (SPEC 7a). Both plants share
+one parameter array, so the drive's enable flag reaches whichever is live.
 """
 
 from __future__ import annotations
@@ -13,12 +19,31 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from harness.model.bearing import BearingConfig, friction_force
+from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, acceleration_maps
+from harness.model.hydraulics import pack_rig
 from harness.model.plant import Plant, TableMotion
 
 if TYPE_CHECKING:
     from harness.motions import GroundMotion
+    from harness.rig.config import RigConfig
+
+
+def rig_params_for(rig: RigConfig | None, building: BuildingConfig) -> np.ndarray | None:
+    """The packed hydraulics of ``rig`` for the plant, or None where the rig has none.
+
+    None (the plant of earlier versions, bit for bit) when the actuator is a force
+    source, the table a motion source and the base mat free.
+    """
+    if rig is None:
+        return None
+    hydraulic = rig.actuator.model == "servo_hydraulic"
+    if not hydraulic and rig.table.model == "motion_source" and not rig.base_pinned:
+        return None
+    return pack_rig(
+        rig.actuator.hydraulics if hydraulic else None, rig.table, building.base_mass_kg, rig.base_pinned,
+        rig.drive.decay_time_constant_s,
+    )
 
 
 class TablePlant:
@@ -33,24 +58,27 @@ class TablePlant:
         ``displacement_m`` and ``sample(t) -> (x, v, a)``).
     rtol : float
         Kernel tolerance.
+    rig : RigConfig, optional
+        The rig's actuator, table and pinning (see :func:`rig_params_for`); default none.
     """
 
-    def __init__(self, building: BuildingConfig, bearing: BearingConfig, motion: GroundMotion, rtol: float):
+    def __init__(
+        self, building: BuildingConfig, bearing: BearingConfig, motion: GroundMotion, rtol: float, rig: RigConfig | None = None,
+    ):
         self.motion = motion
-        self.record = Plant(building, bearing, TableMotion.from_motion(motion), rtol)
+        params = rig_params_for(rig, building)
+        self.record = Plant(building, bearing, TableMotion.from_motion(motion), rtol, params)
+        self.rig_params = self.record.rig_params
         self._hold = np.zeros(2)
         held_table = TableMotion(1.0, np.zeros(2), np.zeros(2), self._hold)
-        self.held = Plant(building, bearing, held_table, rtol)
+        self.held = Plant(building, bearing, held_table, rtol, params)
         self.duration_s = float(motion.duration_s)
         model = self.record.model
         self._n = building.n_stories
         self._i_yb, self._i_vb = model.i_base_displacement, model.i_base_velocity
-        self._mb = model.base_mass_kg
-        self._kb = model.restoring_stiffness_N_per_m
-        self._params = self.record.bearing_params
-        floor_map, base_map = acceleration_maps(building)
+        floor_map, _ = acceleration_maps(building)
         self._floor_map = np.ascontiguousarray(floor_map[:3])
-        self._base_map = base_map
+        self._size = model.size
         self._floor_acc = np.zeros(3)
         self.reset()
 
@@ -60,8 +88,10 @@ class TablePlant:
         self.held.reset()
         self.live = self.held
         self._hold[:] = float(self.motion.displacement_m[0])
+        self.held.reset()  # a dynamic table starts at its drive, now the hold
         self.running = False
         self.record_time_s = 0.0
+        self._held_time_s = 0.0
         self.started = False
 
     @property
@@ -81,7 +111,7 @@ class TablePlant:
         """Hold the table where it is now (velocity zero)."""
         if not self.running:
             return
-        x, _, _ = self.motion.sample(self.record_time_s)
+        x, _ = self.live.table_now(self.record_time_s)
         self._hold[:] = x
         self.held.y[:] = self.live.y
         self.live = self.held
@@ -97,9 +127,15 @@ class TablePlant:
                 self.stop()
         else:
             self.held.advance(t_s, t_s + h_s, force_N)
+            self._held_time_s = t_s + h_s
 
-    def table_truth(self) -> tuple[float, float, float]:
-        """Table ``(x_0, xd_0, xdd_0)`` now (m, m/s, m/s^2)."""
+    @property
+    def time_s(self) -> float:
+        """The live plant's time (s): record time while the table plays, else the rig's."""
+        return self.record_time_s if self.running else self._held_time_s
+
+    def drive(self) -> tuple[float, float, float]:
+        """The table's drive ``(x_d, xd_d, xdd_d)`` now (m, m/s, m/s^2): the record, or the hold."""
         if self.running:
             return self.motion.sample(self.record_time_s)
         return float(self._hold[0]), 0.0, 0.0
@@ -107,16 +143,17 @@ class TablePlant:
     def truth(self, out: np.ndarray, force_N: float) -> None:
         """The twelve true signals of :data:`harness.rig.sensors.SIGNALS` into ``out`` (SI).
 
-        ``force_N`` is the actuator force acting now (for the base-mat acceleration).
+        ``force_N`` is what the plant integrates with now (:meth:`advance`): the actuator
+        force, or a servo-hydraulic actuator's command.
         """
-        y = self.live.y
-        x0, v0, a0 = self.table_truth()
-        yb, vb = y[self._i_yb], y[self._i_vb]
-        z = y[:-1]
-        friction = friction_force(vb - v0, y[-1], self._params)
+        live = self.live
+        y = live.y
+        t = self.time_s
+        x0, v0 = live.table_now(t)
+        a0, base_acc = live.accelerations(t, force_N)
         out[0], out[1], out[2] = x0, v0, a0
-        out[3], out[4] = yb, vb
-        out[5] = float(self._base_map @ z) + (self._kb * x0 - friction + force_N) / self._mb
+        out[3], out[4] = y[self._i_yb], y[self._i_vb]
+        out[5] = base_acc
         out[6], out[7], out[8] = y[0], y[1], y[2]
-        np.dot(self._floor_map, z, out=self._floor_acc)
+        np.dot(self._floor_map, y[: self._size], out=self._floor_acc)
         out[9:12] = self._floor_acc

@@ -32,7 +32,7 @@ from drivers.writer import RigWriter
 from harness.can_config import CanConfig
 from harness.errors import ModelError
 from harness.rig import inbox
-from harness.rig.actuator import ServoActuator
+from harness.rig.actuator import make_actuator
 from harness.rig.drive import Drive
 from harness.rig.faults import (
     DRIVE_FAULT,
@@ -110,9 +110,9 @@ class VirtualRig:
             self.bus, protocol, writer = bus_or_link.bus, bus_or_link.protocol, bus_or_link.writer
         seeds = np.random.SeedSequence(cfg.seed if seed is None else seed).spawn(2)
         self._force_rng = np.random.default_rng(seeds[1])
-        self.table = TablePlant(parts.building, parts.bearing, motion, parts.rtol)
+        self.table = TablePlant(parts.building, parts.bearing, motion, parts.rtol, cfg)
         self.sensors = SensorModel(cfg.sensors, self.h, 3.0 + MAX_EXTRA_DELAY_S, np.random.default_rng(seeds[0]))
-        self.actuator = ServoActuator(cfg.actuator, self.h, cfg.drive.decay_time_constant_s)
+        self.actuator = make_actuator(cfg, self.h, self.table)
         self.drive = Drive(cfg.drive.watchdog_timeout_s)
         self.faults = FaultSet(schedule_from(cfg.faults))
         self.publisher = RigPublisher(writer, self.faults, self.sensors)
@@ -195,13 +195,14 @@ class VirtualRig:
     def _substep(self) -> None:
         enabled = self.drive.enabled
         force = self.actuator.substep(self.drive.command_N, enabled)
+        plant_input = self.actuator.plant_input(force)
         table = self.table
         t = self.n * self.h
-        self.history.append(t, table.record_time_s if table.running else None, force, table.y)
-        table.advance(t, self.h, force)
+        self.history.append(t, table.record_time_s if table.running else None, plant_input, table.y)
+        table.advance(t, self.h, plant_input)
         self.n += 1
         self.force_N = force
-        table.truth(self._truth, force)
+        table.truth(self._truth, plant_input)
         self.sensors.push(self._truth)
 
     def _step(self, now: float) -> None:

@@ -90,8 +90,12 @@ class ForceTracking(Detector):
 
     Detects: ``|measured_force_N - expected| > tracking_tolerance_N`` for at least
     ``tracking_time_s``, where ``expected`` is the force commanded on the previous
-    tick passed through a first-order lag with ``actuator_time_constant_s`` (none
-    when 0). The supervisor writes that command to :attr:`command_N` before each
+    tick, less the actuator's natural velocity feedback ``velocity_feedback_Ns_per_m``
+    times the measured sliding velocity, passed through a first-order lag with
+    ``actuator_time_constant_s`` (none when 0). That is the low-frequency model of a
+    servo-hydraulic actuator under a proportional force loop (docs/SAFETY.md, "Force
+    tracking of a servo-hydraulic actuator"); with no velocity feedback, a force source.
+    The supervisor writes that command to :attr:`command_N` before each
     update. Bound: ``tracking_time_s`` after the error first exceeds the
     tolerance. Action: ``tracking_action`` (default TRIP). Reset: explicit reset
     (filter and timer cleared; not knowable from one sample).
@@ -99,11 +103,11 @@ class ForceTracking(Detector):
 
     NAME = "force_tracking"
     ACTION = Action.TRIP
-    DETECTS = "|measured - lagged commanded force| above tracking_tolerance_N for tracking_time_s"
+    DETECTS = "|measured - lagged (commanded - velocity feedback) force| above tracking_tolerance_N for tracking_time_s"
     BOUND = "tracking_time_s after the error exceeds the tolerance"
     RESET = "explicit reset; filter and timer cleared"
 
-    __slots__ = ("tolerance_N", "command_N", "_lag", "_timer", "_error_N")
+    __slots__ = ("tolerance_N", "command_N", "_lag", "_timer", "_error_N", "_feedback_Ns_per_m", "_target_N")
 
     def __init__(self, config: ForceConfig) -> None:
         super().__init__(ACTION_BY_NAME[config.tracking_action])
@@ -112,15 +116,18 @@ class ForceTracking(Detector):
         self._lag = LowPass(config.actuator_time_constant_s) if config.actuator_time_constant_s > 0 else None
         self._timer = Persistence(config.tracking_time_s)
         self._error_N = 0.0
+        self._feedback_Ns_per_m = config.velocity_feedback_Ns_per_m
+        self._target_N = 0.0
 
     def expected_N(self) -> float:
         """The force the actuator should show now (N)."""
-        return self.command_N if self._lag is None else self._lag.y
+        return self._target_N if self._lag is None else self._lag.y
 
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
         """True once the tracking error has persisted for ``tracking_time_s``."""
+        self._target_N = self.command_N - self._feedback_Ns_per_m * health.meas.sliding_velocity_m_s
         if self._lag is not None:
-            self._lag.update(self.command_N, dt)
+            self._lag.update(self._target_N, dt)
         self._error_N = health.measured_force_N - self.expected_N()
         return self._timer.update(t, not abs(self._error_N) <= self.tolerance_N)
 
@@ -135,6 +142,7 @@ class ForceTracking(Detector):
     def reset(self) -> None:
         """Clear the lag (to zero force) and the timer."""
         self.command_N = 0.0
+        self._target_N = 0.0
         if self._lag is not None:
             self._lag.reset(0.0, True)
         self._timer.reset()

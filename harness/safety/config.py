@@ -44,6 +44,10 @@ class ForceConfig:
     tracking_tolerance_N: float = quantity(1_500.0, unit="N", gt=0, doc="|measured - expected force| allowed")
     tracking_time_s: float = quantity(0.1, unit="s", gt=0, doc="how long the tracking error may persist")
     actuator_time_constant_s: float = quantity(0.01, unit="s", ge=0, doc="first-order lag of the actuator (0: none)")
+    velocity_feedback_Ns_per_m: float = quantity(
+        0.0, unit="N*s/m", ge=0, le=1.0e6,
+        doc="force the actuator loses per m/s of sliding velocity (k_h / w_f of a servo-hydraulic force loop; 0: a force source)",
+    )
     tracking_action: DetectorActionName = field(default="trip", metadata={"doc": "action on a force-tracking fault"})
     actuator_rating_N: float | None = quantity(
         None, unit="N", gt=0, doc="rated force of the real rig's actuator; max_force_N may not exceed it (null: not declared)",
@@ -204,7 +208,10 @@ def _positive_problems(config: SafetyConfig) -> list[str]:
         "stroke": config.stroke, "force": config.force, "sensors": config.sensors,
         "comms": config.comms, "actuator": config.actuator, "run": config.run, "estop": config.estop,
     }
-    may_be_zero = {"stop_time_s", "actuator_time_constant_s", "max_e2e_rejects", "max_error_frames", "max_send_failures"}
+    may_be_zero = {
+        "stop_time_s", "actuator_time_constant_s", "velocity_feedback_Ns_per_m", "max_e2e_rejects", "max_error_frames",
+        "max_send_failures",
+    }
     for group_name, group in groups.items():
         for name, value in vars(group).items():
             if isinstance(value, bool) or not isinstance(value, (int, float)):

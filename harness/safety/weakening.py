@@ -51,6 +51,7 @@ DIRECTIONS: dict[str, Direction] = {
     "force.tracking_tolerance_N": "larger",
     "force.tracking_time_s": "larger",
     "force.actuator_time_constant_s": "smaller",  # a faster claimed actuator widens the stall budget
+    "force.velocity_feedback_Ns_per_m": "larger",  # a larger claimed force deficit at speed hides more of a real one
     "force.tracking_action": "milder",
     "force.actuator_rating_N": "larger",  # None (no rating declared) is the weakest
     "sensors.max_sensor_age_s": "larger",

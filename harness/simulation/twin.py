@@ -22,7 +22,7 @@ from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.peaks import peak_responses
 from harness.profile import Profile
-from harness.rig.actuator import ServoActuator
+from harness.rig.actuator import make_actuator
 from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
 from harness.rig.table import TablePlant
 from harness.safety.health import TickHealth
@@ -121,11 +121,11 @@ class _TwinRig:
         rig = profile.rig
         self.substep_s = rig.physics_substep_s
         self.substeps_per_sample = int(round(period_s / self.substep_s))
-        self.table = TablePlant(profile.structure, profile.bearing, motion, profile.simulation.rtol)
+        self.table = TablePlant(profile.structure, profile.bearing, motion, profile.simulation.rtol, rig)
         rng = np.random.default_rng(rig.seed if seed is None else seed)
         self.sensors = SensorModel(rig.sensors, self.substep_s, _MAX_SENSOR_DELAY_S, rng)
         self.sensors.set_delays(asynchronous_delay_s, self.substeps_per_sample if lockstep else None)
-        self.actuator = ServoActuator(rig.actuator, self.substep_s, rig.drive.decay_time_constant_s)
+        self.actuator = make_actuator(rig, self.substep_s, self.table)
         self.truth = np.zeros(len(SIGNALS))
         #: The latest reading of each sensor message (SI, DBC signal order); story readings hold between their samples.
         self.readings = tuple([0.0] * len(columns) for columns in MESSAGE_COLUMNS)
@@ -148,9 +148,9 @@ class _TwinRig:
         """Advance actuator, plant and sensors over one sample from ``t`` (s), sub-step by sub-step."""
         h, actuator, table, sensors, truth = self.substep_s, self.actuator, self.table, self.sensors, self.truth
         for j in range(self.substeps_per_sample):
-            force = actuator.substep(command.force_N, command.enable)
-            table.advance(t + j * h, h, force)
-            table.truth(truth, force)
+            plant_input = actuator.plant_input(actuator.substep(command.force_N, command.enable))
+            table.advance(t + j * h, h, plant_input)
+            table.truth(truth, plant_input)
             sensors.push(truth)
         self.substeps += self.substeps_per_sample
 

@@ -50,7 +50,9 @@ class Bench:
     """The harness tick on one side of a bus, a rig-side node on the other."""
 
     def __init__(self, safety: SafetyConfig | None = None) -> None:
-        profile = load_profile(None)
+        # The rig-side node here echoes the command as the measured force: a force source,
+        # so the tracking check expects no velocity feedback from it.
+        profile = load_profile(None, overrides=["safety.force.velocity_feedback_Ns_per_m=0"])
         can = CanConfig(interface="virtual", channel=f"tick-{uuid.uuid4().hex[:8]}")
         self.rig = open_rig(can)
         self.link = open_harness(can)

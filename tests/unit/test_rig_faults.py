@@ -165,5 +165,9 @@ def test_the_shipped_profile_has_a_usable_rig_section():
     rig = profile.rig
     period = 1.0 / profile.loop.rate_hz
     assert abs(period / rig.physics_substep_s - round(period / rig.physics_substep_s)) < 1e-9
-    assert rig.actuator.model == "first_order" and rig.actuator.force_limit_N <= 30_000.0
+    assert rig.actuator.model == "servo_hydraulic" and rig.table.model == "servo_hydraulic"
+    assert rig.actuator.force_limit_N <= 30_000.0
+    # The tracking check expects the shipped actuator's own velocity feedback, k_h / w_f.
+    assert profile.safety.force.velocity_feedback_Ns_per_m == pytest.approx(
+        rig.actuator.hydraulics.loop_damping_Ns_per_m(), rel=0.01)
     assert rig.sensors.displacement.noise_std_m > 0 and rig.faults == ()
