@@ -12,6 +12,7 @@ from typing import Literal
 
 from harness.input_limits import MAX_SEED
 from harness.rig.faults import fault_id_for
+from harness.rig.truth import TruthConfig
 from harness.schema import quantity
 
 FaultKind = Literal[
@@ -130,3 +131,4 @@ class RigConfig:
     actuator: ActuatorConfig = field(default_factory=ActuatorConfig)
     drive: DriveConfig = field(default_factory=DriveConfig)
     faults: tuple[FaultSpec, ...] = quantity((), doc="scheduled faults")
+    truth: TruthConfig = field(default_factory=TruthConfig, metadata={"doc": "the rig's own structure and bearing values"})

@@ -50,7 +50,9 @@ def run_rig_twin(
     Parameters
     ----------
     profile : Profile
-        Its ``rig`` section gives the sensors, actuator and physics sub-step; ``safety`` the limits.
+        Its ``rig`` section gives the sensors, actuator and physics sub-step, and with ``rig.truth``
+        the plant's true building and bearing; ``safety`` the limits. The friction estimator
+        and the supervisor use the design (``structure``, ``bearing``).
     motion : GroundMotion
         The processed record (the table plays it from t = 0).
     rate_hz : float
@@ -121,7 +123,8 @@ class _TwinRig:
         rig = profile.rig
         self.substep_s = rig.physics_substep_s
         self.substeps_per_sample = int(round(period_s / self.substep_s))
-        self.table = TablePlant(profile.structure, profile.bearing, motion, profile.simulation.rtol)
+        truth = profile.rig_truth()  # the rig's own building and bearing; the controller keeps the design
+        self.table = TablePlant(truth.building, truth.bearing, motion, profile.simulation.rtol)
         rng = np.random.default_rng(rig.seed if seed is None else seed)
         self.sensors = SensorModel(rig.sensors, self.substep_s, _MAX_SENSOR_DELAY_S, rng)
         self.sensors.set_delays(asynchronous_delay_s, self.substeps_per_sample if lockstep else None)
