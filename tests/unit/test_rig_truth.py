@@ -208,3 +208,12 @@ def test_the_report_names_the_difference_and_says_nothing_without_one():
     assert note.startswith("rig truth differs from design: bearing.mu_max 0.075 (design 0.06)")
     assert "used the design values" in note
     assert truth_note(_run_data({})) == ""
+
+
+def test_the_truth_survives_the_resolved_profile_the_rig_process_is_given():
+    from harness.profile import Profile
+
+    profile = _load(MU_SET, STIFFNESS_SET)
+    again = Profile.from_resolved(profile.resolved_data())  # what `harness dry-run` hands its rig process
+    assert again.rig_truth() == profile.rig_truth()
+    assert again.bearing == profile.bearing and again.structure == profile.structure
