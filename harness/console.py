@@ -100,7 +100,7 @@ def _events_text(status: LoopStatus) -> Text:
 
 
 def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, force_limit_N: float, title: str,
-                 alerts: tuple[str, ...] = ()) -> Panel:
+                 alerts: tuple[str, ...] = (), notes: tuple[str, ...] = ()) -> Panel:
     """The console's panel for the current contents of ``status``.
 
     Parameters
@@ -114,6 +114,9 @@ def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, f
     alerts : tuple of str
         Lines shown in red above everything else for the whole run, e.g. the safety
         settings the command line weakened (harness/safety/weakening.py).
+    notes : tuple of str
+        Lines shown in yellow under the alerts for the whole run, e.g. where the virtual
+        rig's truth differs from the design (harness/rig/truth.py).
     """
     s = status
     grid = Table.grid(padding=(0, 2))
@@ -121,6 +124,8 @@ def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, f
     grid.add_column()
     for alert in alerts:
         grid.add_row(Text("WARNING", style="bold red"), Text(alert, style="bold red"))
+    for note in notes:
+        grid.add_row(Text("NOTE", style="bold yellow"), Text(note, style="yellow"))
     grid.add_row("state", _state_text(s))
     run_t_s, duration_s = s.run_t_s, s.duration_s
     done = 0.0 if duration_s <= 0 else min(1.0, run_t_s / duration_s)
@@ -190,7 +195,7 @@ def _sigint_blocked():
 def view_command(status_path: str, soft_limit_m: float, hard_limit_m: float, force_limit_N: float, title: str, *,
                  parent_pid: int, fd: int = 1, width: int | None = None, color_system: str | None = None,
                  force_terminal: bool | None = None, timing_out: str | None = None,
-                 alerts: tuple[str, ...] = ()) -> list[str]:
+                 alerts: tuple[str, ...] = (), notes: tuple[str, ...] = ()) -> list[str]:
     """The command line of the console's child process (:mod:`harness.console_view`).
 
     Parameters
@@ -215,6 +220,8 @@ def view_command(status_path: str, soft_limit_m: float, hard_limit_m: float, for
         Write the child's start-up and render timing (JSON) here when it exits.
     alerts : tuple of str
         Red lines of the panel (:func:`status_panel`).
+    notes : tuple of str
+        Yellow lines of the panel (:func:`status_panel`).
     """
     command = [sys.executable, "-m", "harness.console_view", f"--status={status_path}",
                f"--soft-limit-m={soft_limit_m!r}", f"--hard-limit-m={hard_limit_m!r}", f"--force-limit-n={force_limit_N!r}",
@@ -227,6 +234,7 @@ def view_command(status_path: str, soft_limit_m: float, hard_limit_m: float, for
     if timing_out is not None:
         command.append(f"--timing-out={timing_out}")
     command += [f"--alert={alert}" for alert in alerts]
+    command += [f"--note={note}" for note in notes]
     return command
 
 
@@ -265,13 +273,16 @@ class LiveConsole:
         False shows nothing (tests, --quiet).
     alerts : tuple of str
         Red lines shown on the panel for the whole run (the safety settings the command line weakened).
+    notes : tuple of str
+        Yellow lines shown under them for the whole run (where the virtual rig's truth differs from the design).
     """
 
     def __init__(self, status: LoopStatus, soft_limit_m: float, hard_limit_m: float, force_limit_N: float,
                  title: str, timing: TimingStats | None = None, console: Console | None = None, enabled: bool = True,
-                 alerts: tuple[str, ...] = ()):
+                 alerts: tuple[str, ...] = (), notes: tuple[str, ...] = ()):
         self.status = status
         self.alerts = tuple(alerts)
+        self.notes = tuple(notes)
         self.timing = timing
         self.soft, self.hard, self.force_limit = soft_limit_m, hard_limit_m, force_limit_N
         self.title = title
@@ -283,7 +294,7 @@ class LiveConsole:
         self._print_final_panel = False
 
     def __rich__(self) -> Panel:
-        return status_panel(self.status, self.soft, self.hard, self.force_limit, self.title, self.alerts)
+        return status_panel(self.status, self.soft, self.hard, self.force_limit, self.title, self.alerts, self.notes)
 
     def wants_child(self) -> bool:
         """Whether the panel is drawn live by a child: enabled, and the default console or a terminal."""
@@ -312,7 +323,7 @@ class LiveConsole:
         command = view_command(
             self.status.path, self.soft, self.hard, self.force_limit, self.title, parent_pid=os.getpid(), fd=fd,
             width=_explicit_width(console, fd), color_system=console.color_system, force_terminal=console.is_terminal,
-            alerts=self.alerts,
+            alerts=self.alerts, notes=self.notes,
         )
         try:
             console.file.flush()

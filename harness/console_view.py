@@ -69,6 +69,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--refresh-hz", type=float, default=4.0)
     parser.add_argument("--timing-out", default=None, help="write start-up and render timing here (JSON) at exit")
     parser.add_argument("--alert", action="append", default=[], help="a red line of the panel (repeatable)")
+    parser.add_argument("--note", action="append", default=[], help="a yellow line of the panel (repeatable)")
     return parser.parse_args(argv)
 
 
@@ -140,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     color_system = None if args.color_system == "none" else args.color_system
     console = Console(file=open_output(args.fd), width=args.width, color_system=color_system, force_terminal=args.force_terminal)
     view = LiveConsole(status, args.soft_limit_m, args.hard_limit_m, args.force_limit_n, args.title, console=console,
-                       enabled=False, alerts=tuple(args.alert))
+                       enabled=False, alerts=tuple(args.alert), notes=tuple(args.note))
     live = Live(view, console=console, auto_refresh=False, transient=False, redirect_stdout=False, redirect_stderr=False)
     frames = FrameLog()
     try:

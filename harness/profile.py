@@ -44,6 +44,7 @@ from harness.model.building import BuildingConfig
 from harness.motions import RecordConfig, TableLimits
 from harness.paths import PROFILE_DIR
 from harness.rig.config import RigConfig
+from harness.rig.truth import RigTruth, resolve_truth
 from harness.safety.config import SafetyConfig, check_config
 from harness.safety.weakening import Weakening, weakenings
 from harness.schema import build, internal, quantity, to_data
@@ -113,6 +114,15 @@ class Profile:
         if rate_hz:
             changes.update(command_rate_hz=rate_hz, sensor_rate_hz=rate_hz)
         return dataclasses.replace(self.can, **changes) if changes else self.can
+
+    def rig_truth(self) -> RigTruth:
+        """The virtual rig's true building and bearing (``rig.truth`` over the top-level sections) and how they differ.
+
+        Only the virtual rig, its offline twin and their passive references use these; the
+        controller, the friction estimator and the supervisor use ``structure`` and
+        ``bearing`` (:mod:`harness.rig.truth`).
+        """
+        return resolve_truth(self.structure, self.bearing, self.rig.truth)
 
     def resolved_data(self) -> dict:
         """The fully resolved profile as plain data (SI), for run folders and the rig process."""
@@ -231,7 +241,8 @@ def parse_overrides(items: list[str] | tuple[str, ...]) -> dict:
             raise ProfileError(f"override {item!r}: in the value, {err.describe()}", "--set") from err
         except yaml.YAMLError as err:
             problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-            raise ProfileError(f"override {item!r}: the value is not valid YAML ({problem})", "--set") from err
+            hint = "; expected a list as [v1, v2, ...], e.g. [0.6e6, 2.1e6, 1.5e6]" if text.lstrip().startswith("[") else ""
+            raise ProfileError(f"override {item!r}: the value is not valid YAML ({problem}){hint}", "--set") from err
         parts = tuple(part.strip() for part in key.strip().split("."))
         clash = next((earlier for path, earlier in given.items() if _overlaps(path, parts)), None)
         if clash is not None:
@@ -311,8 +322,13 @@ def _own_safety(data: dict, variant: str | None, source: str) -> SafetyConfig:
 
 
 def _build_checked(data: dict, source: str) -> Profile:
-    """Build a profile and refuse a force limit its protocol or its actuator cannot carry."""
+    """Build a profile; refuse a ``rig.truth`` that makes an invalid building or bearing, and a force
+    limit its protocol or its actuator cannot carry."""
     profile = build(Profile, data, source=source)
+    try:
+        profile.rig_truth()
+    except ProfileError as err:
+        raise ProfileError(err.detail, source, err.key_path) from err
     max_force_N = profile.safety.force.max_force_N
     for ceiling_N, what in _force_ceilings(profile):
         if max_force_N > ceiling_N:

@@ -100,4 +100,6 @@ def run(args: argparse.Namespace, console: Console) -> int:
                   f"{difference_pct:.1f} % ({worst})")
     print_timing(console, session.loop.timing, result.profile.control.rate_hz)
     print_outcome(console, session, virtual_rig=not options.external_rig, weakened=profile.safety_weakened)
+    if result.truth_note:
+        console.print(f"  [yellow]{escape(result.truth_note)}[/]", highlight=False)
     return session.exit_code

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from rich.console import Console
+from rich.markup import escape
 
 from harness import exit_codes
 from harness.commands.options import (
@@ -50,6 +51,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace, console: Console) -> int:
+    from harness.rig.truth import truth_summary
     from harness.runs.rig_service import serve_rig
     from harness.runs.simulate import resolve_profile
 
@@ -66,4 +68,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         console.print(f"virtual rig on interface {can_config.interface!r}, channel {can_config.channel!r}"
                       f"{' (lockstep)' if args.lockstep else ''}; `harness dry-run --external-rig --interface "
                       f"{can_config.interface} --channel {can_config.channel}` reaches it; Ctrl-C stops it", highlight=False)
+        truth_note = truth_summary(profile.rig_truth().differences)
+        if truth_note:
+            console.print(f"[yellow]{escape(truth_note)}[/]", highlight=False)
         return serve_rig(profile, can_config, lockstep=args.lockstep, seed=args.seed, parent_pid=args.parent_pid)

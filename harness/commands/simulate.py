@@ -104,6 +104,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
 def _print_study(console: Console, result: Any) -> None:
     """The record's facts, the controller's settings and the peak table of one study."""
     from harness.report.tables import reduction_table
+    from harness.rig.truth import truth_summary
 
     motion = result.motion
     console.print(
@@ -122,6 +123,9 @@ def _print_study(console: Console, result: Any) -> None:
         title += f", design stiffness x{result.design_stiffness_scale:g}"
     if result.rig_effects:
         title += ", through the rig's sensor, actuator and safety models"
+        truth_note = truth_summary(result.truth_differences())
+        if truth_note:
+            console.print(f"  [yellow]note: {escape(truth_note)}[/]", highlight=False)
     controlled = result.cases.get("controlled")
     if controlled is not None and controlled.extra.get("outcome") == "tripped":
         console.print(f"[bold red]the controlled case tripped:[/] {escape(controlled.extra['trip_reason'])}")

@@ -13,7 +13,8 @@ used in every table, legend, CSV header and file name. Which peak tables a set o
   simulation). Runs whose metadata names no record match any record.
 
 Then the context: the record's facts, the table's target against achieved motion, the
-controller's parameters, the loop timing, and each run's events and interlocks.
+controller's parameters, the loop timing, and each run's events and interlocks. Among the
+warnings: a run whose virtual rig's truth differed from the design (``rig.truth``) says where.
 """
 
 from __future__ import annotations
@@ -147,7 +148,26 @@ def _record_warnings(runs: Sequence[RunData]) -> list[str]:
             notes.append(f"run {run.label}: the recorder dropped {dropped} (queue full); the signals have gaps")
         if recorder.get("error"):
             notes.append(f"run {run.label}: the recorder stopped writing ({recorder['error']}); later data are missing")
+        truth = truth_note(run)
+        if truth:
+            notes.append(f"run {run.label}: {truth}")
     return notes
+
+
+def truth_note(run: RunData) -> str:
+    """Where the run's virtual rig differs from the design (``metadata["rig_truth"]``, harness/rig/truth.py); "" if not.
+
+    The controller, the friction estimator and the supervisor used the design; the rig, and the
+    simulated passive reference and twin a dry run is compared with, the truth.
+    """
+    truth = run.metadata.get("rig_truth")
+    summary = truth.get("summary") if isinstance(truth, dict) else None
+    if not summary:
+        return ""
+    if run.is_passive:
+        return f"{summary}. This passive case ran on the true values"
+    return (f"{summary}. The controller, its friction estimator and the supervisor used the design values; "
+            "the virtual rig (and a dry run's simulated passive reference and twin) the true ones")
 
 
 def _expand_batch(folder: Path) -> list[Path]:

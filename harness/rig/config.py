@@ -13,6 +13,7 @@ from typing import Literal
 from harness.input_limits import MAX_SEED
 from harness.model.hydraulics import HydraulicActuatorConfig, TableConfig
 from harness.rig.faults import fault_id_for
+from harness.rig.truth import TruthConfig
 from harness.schema import quantity
 
 FaultKind = Literal[
@@ -139,3 +140,4 @@ class RigConfig:
     table: TableConfig = field(default_factory=TableConfig)
     drive: DriveConfig = field(default_factory=DriveConfig)
     faults: tuple[FaultSpec, ...] = quantity((), doc="scheduled faults")
+    truth: TruthConfig = field(default_factory=TruthConfig, metadata={"doc": "the rig's own structure and bearing values"})

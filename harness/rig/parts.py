@@ -7,11 +7,12 @@ from dataclasses import dataclass
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
 from harness.rig.config import RigConfig
+from harness.rig.truth import resolve_truth
 
 
 @dataclass(frozen=True)
 class RigParts:
-    """What the rig is built from: the profile's building, bearing, rig section and tolerance."""
+    """What the rig is built from: the rig's true building and bearing, its rig section and tolerance."""
 
     building: BuildingConfig
     bearing: BearingConfig
@@ -20,8 +21,14 @@ class RigParts:
 
     @classmethod
     def from_profile(cls, profile) -> RigParts:
-        """From a :class:`~harness.profile.Profile` (its ``rig`` section, or the defaults)."""
-        return cls(profile.structure, profile.bearing, getattr(profile, "rig", None) or RigConfig(), profile.simulation.rtol)
+        """From a :class:`~harness.profile.Profile` (its ``rig`` section, or the defaults).
+
+        The building and bearing are the rig's truth: the profile's ``structure`` and
+        ``bearing`` with ``rig.truth`` over them (:mod:`harness.rig.truth`).
+        """
+        rig = getattr(profile, "rig", None) or RigConfig()
+        truth = resolve_truth(profile.structure, profile.bearing, rig.truth)
+        return cls(truth.building, truth.bearing, rig, profile.simulation.rtol)
 
 
 @dataclass(frozen=True)

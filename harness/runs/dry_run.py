@@ -37,6 +37,7 @@ from harness.paths import LOG_DIR
 from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.recording import load_run
+from harness.rig.truth import truth_metadata, truth_summary
 from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, run_session
 from harness.runs.simulate import (
@@ -80,6 +81,7 @@ class DryRunResult:
     twin: CaseResult | None
     motion: GroundMotion
     span_s: float | None = None  # record time covered by a run that ended early (s); None: the whole record
+    truth_note: str = ""  # where the rig it served differs from the design (harness/rig/truth.py); "" when it does not
 
     def largest_twin_difference(self) -> tuple[str, float]:
         """The peak that differs most from the simulated twin's, and by how much (% of the twin's).
@@ -195,11 +197,14 @@ def simulated_twins(
     adds on average one period of delay (frames sampled up to a period old, commands
     applied up to a period late); in lockstep there is none, and sensor delays are
     rounded to whole steps as the rig does. ``span_s`` limits both to the record time a
-    run that ended early covered (s), so peaks are compared over the same span.
+    run that ended early covered (s), so peaks are compared over the same span. Both run on
+    the rig's truth (``rig.truth``): the reduction a dry run reports is then its controller's
+    on that rig, as a lab's passive and controlled tests on one table are.
     """
     duration_s = motion.duration_s if span_s is None else max(min(span_s, motion.duration_s), 1.0 / rate_hz)
     table = TableMotion.from_motion(motion)
-    plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
+    truth = profile.rig_truth()  # a passive test on the same rig: the rig's truth, not the design
+    plant = Plant(truth.building, truth.bearing, table, rtol=profile.simulation.rtol)
     passive = run_case("passive", plant, duration_s, SamplingSettings(rate_hz))
     delay = 0.0 if lockstep else 1.0 / rate_hz
     twin = run_rig_twin(profile, motion, rate_hz, make_controller(profile, controller), asynchronous_delay_s=delay,
@@ -232,11 +237,14 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     if can.interface == PRIVATE_BUS_INTERFACE and not options.external_rig:
         # a private bus per dry run: two dry runs at once (or a test suite) never meet
         can = dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}")
+    # An external rig serves its own profile: only a rig this command serves is known to have this truth.
+    differences = () if options.external_rig else profile.rig_truth().differences
     settings = SessionSettings(
         kind="dry-run", can=can, duration_s=motion.duration_s,
         log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
         show_console=options.show_console,
-        metadata={"record": motion_facts(motion)},
+        metadata={"record": motion_facts(motion), **truth_metadata(differences)},
+        notes=(truth_summary(differences),) if differences else (),
     )
     rig = rig_link = process = None
     switch_interval = sys.getswitchinterval()
@@ -271,7 +279,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     if options.compare:
         passive, twin = simulated_twins(profile, motion, rate_hz, profile.control.controller, options.lockstep, span)
     write_dry_run_context(session.run_path, motion, passive, twin, span, options.lockstep)  # for `harness report`
-    return DryRunResult(session, profile, peaks, passive, twin, motion, span)
+    return DryRunResult(session, profile, peaks, passive, twin, motion, span, truth_summary(differences))
 
 
 def _stop_process(process: subprocess.Popen) -> None:

@@ -56,6 +56,8 @@ class SessionSettings:
     lockstep: bool = False
     show_console: bool = True
     metadata: dict = field(default_factory=dict)
+    #: Yellow lines of the live console for the whole run (e.g. where the rig's truth differs from the design).
+    notes: tuple[str, ...] = ()
 
 
 @dataclass
@@ -228,7 +230,8 @@ def run_session(
         title += " (lockstep)" if lockstep else ""
         alerts = (summary(profile.safety_weakened),) if profile.safety_weakened else ()
         with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,
-                         profile.safety.force.max_force_N, title, loop.timing, console, settings.show_console, alerts):
+                         profile.safety.force.max_force_N, title, loop.timing, console, settings.show_console, alerts,
+                         settings.notes):
             try:
                 result = loop.run()
             except ArmTimeout as err:

@@ -23,6 +23,7 @@ from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
 from harness.motions import GroundMotion, check_table_limits, load_motion
 from harness.profile import Profile
+from harness.rig.truth import TruthDifference, truth_metadata
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 
 NO_CONTROLLER = "none"
@@ -57,6 +58,10 @@ class StudyResult:
     rig_effects: bool = False
     cases: dict[str, CaseResult] = field(default_factory=dict)
 
+    def truth_differences(self) -> tuple[TruthDifference, ...]:
+        """Where the simulated rig differs from the design: ``rig.truth``, with rig effects only (else none)."""
+        return self.profile.rig_truth().differences if self.rig_effects else ()
+
     def to_json(self) -> dict:
         """The JSON document of ``harness simulate --json`` (SI units)."""
         motion = self.motion
@@ -74,6 +79,7 @@ class StudyResult:
             },
             "total_weight_N": self.profile.structure.total_weight_N,
             "cases": {"passive": self.cases["passive"].peaks.as_json(), "controlled": controlled.peaks.as_json()},
+            **truth_metadata(self.truth_differences()),
         }
 
     def write_json(self, path: str | Path) -> None:
@@ -172,6 +178,11 @@ def sampling_settings(profile: Profile) -> SamplingSettings:
 def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, float], None] | None = None) -> StudyResult:
     """Simulate the passive case and (unless the controller is 'none') the controlled case.
 
+    The ideal simulation is the design's world: plant and controller both use ``structure``
+    and ``bearing``. With ``options.rig_effects`` both cases run on the virtual rig's truth
+    (``rig.truth``, :mod:`harness.rig.truth`), while the controller and the friction estimator
+    keep the design.
+
     Parameters
     ----------
     profile : Profile
@@ -186,7 +197,10 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     name = NO_CONTROLLER if options.controller == NO_CONTROLLER else profile.control.controller
     controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
     table = TableMotion.from_motion(motion)
-    plant = Plant(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
+    # With rig effects the passive case runs on the rig's truth (rig.truth), like the twin it is compared with.
+    truth = profile.rig_truth() if options.rig_effects else None
+    building, bearing = (truth.building, truth.bearing) if truth is not None else (profile.structure, profile.bearing)
+    plant = Plant(building, bearing, table, rtol=profile.simulation.rtol)
     result = StudyResult(profile, motion, name, settings, scale, options.rig_effects)
     duration = motion.duration_s
 

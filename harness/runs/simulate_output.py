@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from harness.recording.simcase import write_simulation_case
+from harness.rig.truth import METADATA_KEY as RIG_TRUTH
 from harness.rowlayout import SIMULATED_CONTROL
 
 
@@ -51,6 +52,8 @@ def case_metadata(result: Any, name: str, summary: Mapping[str, Any], label: str
         "integrator_steps": case.integrator_steps,
         "wall_time_s": case.wall_time_s,
     }
+    if RIG_TRUTH in summary:  # the rig twin ran on a rig that is not the design (harness/rig/truth.py)
+        metadata[RIG_TRUTH] = summary[RIG_TRUTH]
     if label:
         metadata["label"] = f"{label} {name}"
     if profile.table is not None:  # a rig profile: its safety limits are the rig's own

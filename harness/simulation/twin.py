@@ -23,6 +23,7 @@ from harness.control.estimator import FrictionEstimator
 from harness.peaks import peak_responses
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
+from harness.rig.parts import RigParts
 from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
 from harness.rig.table import TablePlant
 from harness.safety.health import TickHealth
@@ -50,7 +51,9 @@ def run_rig_twin(
     Parameters
     ----------
     profile : Profile
-        Its ``rig`` section gives the sensors, actuator and physics sub-step; ``safety`` the limits.
+        Its ``rig`` section gives the sensors, actuator and physics sub-step, and with ``rig.truth``
+        the plant's true building and bearing; ``safety`` the limits. The friction estimator
+        and the supervisor use the design (``structure``, ``bearing``).
     motion : GroundMotion
         The processed record (the table plays it from t = 0).
     rate_hz : float
@@ -121,7 +124,8 @@ class _TwinRig:
         rig = profile.rig
         self.substep_s = rig.physics_substep_s
         self.substeps_per_sample = int(round(period_s / self.substep_s))
-        self.table = TablePlant(profile.structure, profile.bearing, motion, profile.simulation.rtol, rig)
+        parts = RigParts.from_profile(profile)  # as the virtual rig: its true building and bearing; the controller keeps the design
+        self.table = TablePlant(parts.building, parts.bearing, motion, parts.rtol, rig)
         rng = np.random.default_rng(rig.seed if seed is None else seed)
         self.sensors = SensorModel(rig.sensors, self.substep_s, _MAX_SENSOR_DELAY_S, rng)
         self.sensors.set_delays(asynchronous_delay_s, self.substeps_per_sample if lockstep else None)
