@@ -11,9 +11,9 @@ import argparse
 
 from rich.console import Console
 
+import harness.commands.identify_actuator as identify_actuator  # not from the package: it imports this module
 from harness import exit_codes
-from harness.commands import identify_actuator
-from harness.commands.options import EPILOG, wrap
+from harness.commands.options import EXIT_STATUS, PROFILES_HELP, wrap
 
 #: The kinds of identification, in the order ``harness identify --help`` lists them.
 KINDS = (identify_actuator,)
@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
             "(--interface, --channel). Every identification is a run like any other: the same loop, the "
             "supervisor with every interlock active, a run folder with the whole record."
         ),
-        epilog="example:\n  harness identify actuator --out frf/\n\n" + EPILOG,
+        epilog="example:\n  harness identify actuator --out frf/ --duration 20\n\n" + EXIT_STATUS + "\n" + PROFILES_HELP,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     kinds = parser.add_subparsers(dest="kind", metavar="KIND")

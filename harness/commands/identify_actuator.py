@@ -10,7 +10,8 @@ from rich.markup import escape
 
 from harness import input_limits as limits
 from harness.commands.options import (
-    EPILOG,
+    EXIT_STATUS,
+    PROFILES_HELP,
     SEED,
     add_bus_options,
     add_profile_options,
@@ -78,7 +79,7 @@ def add_parser(sub) -> None:
             "its own process, in lockstep unless --realtime; --interface/--channel run on the rig serving that bus "
             "(a real rig), in real time."
         ),
-        epilog=EXAMPLES + "\n" + EPILOG,
+        epilog=EXAMPLES + "\n" + EXIT_STATUS + "\n" + PROFILES_HELP,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_profile_options(parser, "profile YAML (default: profiles/nceer_4dof.yaml)")

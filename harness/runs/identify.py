@@ -210,7 +210,7 @@ def plot_conditions(out_dir: Path, title: str) -> Path | None:
     return bode_plot(responses, out_dir / PLOT_FILE, title)
 
 
-def _run_condition(
+def run_condition(
     profile: Profile, condition: Condition, options: IdentifyOptions, samples: np.ndarray, console, on_host_timing,
 ) -> SessionResult:
     """One condition's session on the virtual rig or the external one."""
@@ -281,7 +281,7 @@ def identify_actuator(
         if options.external_rig and confirm is not None and not confirm(condition):
             result.declined = condition
             break
-        session = _run_condition(profile, condition, options, samples, console, on_host_timing)
+        session = run_condition(profile, condition, options, samples, console, on_host_timing)
         done = ConditionResult(condition, session)
         result.conditions.append(done)
         start = session.loop.record_start_t_s
