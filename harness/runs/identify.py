@@ -143,6 +143,16 @@ def excitation_span(t_s: np.ndarray, start_t_s: float, duration_s: float, rate_h
     return (t_s >= start_t_s - half_period) & (t_s <= start_t_s + duration_s + half_period)
 
 
+def on_tick_grid(t_s: np.ndarray, values: np.ndarray, rate_hz: float) -> np.ndarray:
+    """``values`` at every tick from ``t_s[0]`` to ``t_s[-1]`` (linear between rows).
+
+    A real-time loop that skipped a deadline has no row for it; lockstep has every one
+    (the values then come back unchanged).
+    """
+    grid = t_s[0] + np.arange(int(round((t_s[-1] - t_s[0]) * rate_hz)) + 1) / rate_hz
+    return np.interp(grid, t_s, values)
+
+
 def estimate_from_run(run_path: Path, start_t_s: float, excitation: Excitation, rate_hz: float) -> FrequencyResponse:
     """The H1 estimate from a finished run folder, force command to measured force, within the excitation's band.
 
@@ -156,8 +166,11 @@ def estimate_from_run(run_path: Path, start_t_s: float, excitation: Excitation, 
         The loop's rate (Hz).
     """
     run = load_run(run_path)
-    span = excitation_span(run[TIME], start_t_s, excitation.duration_s, rate_hz)
-    response = h1_estimate(run[FORCE_COMMAND][span], run[FORCE_MEASURED][span], rate_hz, excitation.segment_samples(rate_hz))
+    t = run[TIME]
+    span = excitation_span(t, start_t_s, excitation.duration_s, rate_hz)
+    command = on_tick_grid(t[span], run[FORCE_COMMAND][span], rate_hz)
+    measured = on_tick_grid(t[span], run[FORCE_MEASURED][span], rate_hz)
+    response = h1_estimate(command, measured, rate_hz, excitation.segment_samples(rate_hz))
     return response.within(excitation.low_hz, excitation.high_hz)
 
 

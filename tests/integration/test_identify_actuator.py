@@ -144,3 +144,13 @@ def test_the_help_examples_parse():
     for line in lines:
         args = build_parser().parse_args(shlex.split(line)[1:])
         assert args.kind == "actuator" and args.out == "frf/"
+
+
+def test_rows_of_skipped_ticks_are_filled_in_on_the_tick_grid():
+    from harness.runs.identify import on_tick_grid
+
+    t = np.array([1.000, 1.002, 1.004, 1.010, 1.012])  # ticks at 1.006 and 1.008 missed (500 Hz)
+    filled = on_tick_grid(t, 3.0 * t, 500.0)
+    np.testing.assert_allclose(filled, 3.0 * np.arange(1.000, 1.0121, 0.002))
+    every = np.arange(10) / 500.0
+    np.testing.assert_array_equal(on_tick_grid(every, np.sin(every), 500.0), np.sin(every))
