@@ -134,6 +134,9 @@ class RigConfig:
     physics_substep_s: float = quantity(0.0005, unit="s", gt=0.0, le=0.01, doc="actuator/plant sub-step; divides the step period")
     seed: int = quantity(0, ge=0, le=MAX_SEED, doc="seed of every random draw (noise)")
     lockstep: bool = field(default=False, metadata={"doc": "start in lockstep mode"})
+    base_pinned: bool = field(
+        default=False, metadata={"doc": "the base mat is held to the table (blocked actuator), for identification"}
+    )
     history_s: float = quantity(60.0, unit="s", ge=0.0, le=3600.0, doc="length of the exact history ring")
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     actuator: ActuatorConfig = field(default_factory=ActuatorConfig)

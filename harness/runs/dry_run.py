@@ -20,12 +20,14 @@ import os
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 from drivers.link import HarnessLink
 from drivers.protocol_values import RigCommand
+from harness.can_config import CanConfig
 from harness.control.factory import make_controller
 from harness.errors import BusError
 from harness.loop.table_link import CanTableLink
@@ -224,19 +226,70 @@ def record_span_s(session: SessionResult, motion: GroundMotion) -> float | None:
     return span if span < motion.duration_s else None
 
 
-def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timing=None) -> DryRunResult:
-    """Run a dry run; see the module docstring."""
+def private_bus(can: CanConfig, external_rig: bool, suffix: str = "") -> CanConfig:
+    """``can`` on a channel private to this process (and ``suffix``) when the rig is ours on the private bus.
+
+    Two dry runs at once (or a test suite) then never meet on one ``seqpacket`` channel.
+    """
+    if can.interface == PRIVATE_BUS_INTERFACE and not external_rig:
+        return dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}{suffix}")
+    return can
+
+
+@contextmanager
+def serving_virtual_rig(
+    profile: Profile, can: CanConfig, lockstep: bool, motion: GroundMotion, external_rig: bool = False,
+) -> Iterator[RigCoordinator]:
+    """The virtual rig serving ``can`` for the duration of the block; yields the session's :class:`RigCoordinator`.
+
+    On python-can's in-process ``virtual`` interface the rig runs in a thread of this process;
+    otherwise in its own process (:func:`_rig_process`), unless ``external_rig`` says one already
+    serves the channel. The rig is stopped, and its bus closed, however the block ends.
+
+    Parameters
+    ----------
+    profile : Profile
+        Resolved: the rig serves exactly this profile.
+    can : CanConfig
+    lockstep : bool
+    motion : GroundMotion
+        The processed record (the in-process rig's table; the rig process prepares its own).
+    external_rig : bool
+    """
     from harness.can_link import open_rig
     from harness.rig.virtual_rig import VirtualRig
 
+    rate_hz = profile.control.rate_hz
+    rig = rig_link = process = None
+    switch_interval = sys.getswitchinterval()
+    try:
+        if can.interface == "virtual":
+            # The rig shares this process: hand the interpreter lock over every 0.2 ms instead
+            # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
+            sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
+            rig_link = open_rig(can)
+            rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=lockstep, can_config=can)
+            rig.start_thread()
+        elif not external_rig:
+            process = _rig_process(profile, can, lockstep)
+        yield RigCoordinator(lockstep, 1.0 / rate_hz, process)
+    finally:
+        sys.setswitchinterval(switch_interval)
+        if rig is not None:
+            rig.stop()
+        if rig_link is not None:
+            rig_link.close()
+        if process is not None:
+            _stop_process(process)
+
+
+def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timing=None) -> DryRunResult:
+    """Run a dry run; see the module docstring."""
     warm_up()  # compile the kernels now, never inside the loop or the rig
     profile = resolve_profile(profile, options.study)
     motion = prepare_motion(profile)
     rate_hz = profile.control.rate_hz
-    can = profile.can_settings(options.interface, options.channel)
-    if can.interface == PRIVATE_BUS_INTERFACE and not options.external_rig:
-        # a private bus per dry run: two dry runs at once (or a test suite) never meet
-        can = dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}")
+    can = private_bus(profile.can_settings(options.interface, options.channel), options.external_rig)
     # An external rig serves its own profile: only a rig this command serves is known to have this truth.
     differences = () if options.external_rig else profile.rig_truth().differences
     settings = SessionSettings(
@@ -246,33 +299,13 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         metadata={"record": motion_facts(motion), **truth_metadata(differences)},
         notes=(truth_summary(differences),) if differences else (),
     )
-    rig = rig_link = process = None
-    switch_interval = sys.getswitchinterval()
-    try:
-        if can.interface == "virtual":
-            # The rig shares this process: hand the interpreter lock over every 0.2 ms instead
-            # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
-            sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
-            rig_link = open_rig(can)
-            rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=options.lockstep, can_config=can)
-            rig.start_thread()
-        elif not options.external_rig:
-            process = _rig_process(profile, can, options.lockstep)
-        coordinator = RigCoordinator(options.lockstep, 1.0 / rate_hz, process)
+    with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:
         session = run_session(
             profile, settings, on_start=coordinator.table.start,
             make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
             on_link=coordinator.on_link, on_host_timing=on_host_timing, console=console,
             stop_table=coordinator.table.stop,
         )
-    finally:
-        sys.setswitchinterval(switch_interval)
-        if rig is not None:
-            rig.stop()
-        if rig_link is not None:
-            rig_link.close()
-        if process is not None:
-            _stop_process(process)
     peaks = run_peaks(load_run(session.run_path))  # weight: the metadata's, the resolved profile's
     passive = twin = None
     span = record_span_s(session, motion)

@@ -18,6 +18,7 @@ from harness import exit_codes
 from harness.can_config import CanConfig
 from harness.can_link import open_harness
 from harness.console import LiveConsole
+from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.errors import ProfileError
@@ -165,6 +166,7 @@ def run_session(
     console=None,
     stop_table: Callable[[float], object] | None = None,
     table_link: CanTableLink | None = None,
+    controller: Controller | None = None,
 ) -> SessionResult:
     """Run one session and return its outcome; the run folder is finished in every case.
 
@@ -188,6 +190,9 @@ def run_session(
         The table controller on the bus (``table.link: can`` for ``harness run``): started at
         RUNNING, stopped at the end and on a trip (``stop_table`` trip action), record time
         counted from its RIG_STATUS ``table_running``. Overrides ``on_start`` and ``stop_table``.
+    controller : Controller, optional
+        What computes the raw force instead of the profile's ``control.controller`` design (an
+        identification's excitation); the supervisor shapes and supervises it all the same.
 
     Raises
     ------
@@ -198,7 +203,8 @@ def run_session(
         raise ProfileError(f"the CAN protocol carries {PROTOCOL_STORIES} stories; this profile has {profile.structure.n_stories}",
                            profile.source_path, "structure")
     warm_up()  # the estimator's kernel must not compile inside the first tick
-    controller = build_controller_for_rig(profile, profile.control.controller)
+    if controller is None:
+        controller = build_controller_for_rig(profile, profile.control.controller)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
     supervisor = Supervisor(profile.safety, period_s=1.0 / profile.control.rate_hz)
     if table_link is not None:
@@ -226,7 +232,8 @@ def run_session(
         tick.attach_status(status)  # stories, fault code and event lines for the live console
         loop = ControlLoop(tick, profile.loop, profile.control.rate_hz, settings.duration_s, lockstep, on_start, status,
                            table_running=table_link.running if table_link is not None else None)
-        title = f"{profile.name}: {settings.kind}, {profile.control.controller} at {profile.control.rate_hz:g} Hz"
+        controller_name = settings.metadata.get("controller", profile.control.controller)  # an excitation names itself
+        title = f"{profile.name}: {settings.kind}, {controller_name} at {profile.control.rate_hz:g} Hz"
         title += " (lockstep)" if lockstep else ""
         alerts = (summary(profile.safety_weakened),) if profile.safety_weakened else ()
         with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,

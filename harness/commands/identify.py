@@ -1,0 +1,42 @@
+"""``harness identify``: identify the rig's dynamics from measured responses; one module per kind.
+
+``harness identify actuator`` (:mod:`harness.commands.identify_actuator`) is the first kind;
+each later one (a bearing's friction, the structure) is a module with the same
+``add_parser(subparsers)`` and ``run(args, console)`` as a command, listed in :data:`KINDS`.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from rich.console import Console
+
+import harness.commands.identify_actuator as identify_actuator  # not from the package: it imports this module
+from harness import exit_codes
+from harness.commands.options import EXIT_STATUS, PROFILES_HELP, wrap
+
+#: The kinds of identification, in the order ``harness identify --help`` lists them.
+KINDS = (identify_actuator,)
+
+
+def add_parser(sub) -> None:
+    parser = sub.add_parser(
+        "identify",
+        help="measure the rig's dynamics: the actuator's frequency response",
+        description=wrap(
+            "Identify part of the rig from a measured response, on the virtual rig (default) or a real one "
+            "(--interface, --channel). Every identification is a run like any other: the same loop, the "
+            "supervisor with every interlock active, a run folder with the whole record."
+        ),
+        epilog="example:\n  harness identify actuator --out frf/ --duration 20\n\n" + EXIT_STATUS + "\n" + PROFILES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    kinds = parser.add_subparsers(dest="kind", metavar="KIND")
+    for kind in KINDS:
+        kind.add_parser(kinds)
+
+    def without_kind(args: argparse.Namespace, console: Console) -> int:
+        parser.print_help()
+        return exit_codes.INPUT_ERROR
+
+    parser.set_defaults(handler=without_kind)
