@@ -7,13 +7,21 @@ compressed by 2 and run for 30 s, it simulates the quarter-scale rig of
 table: a row per response, and per record the passive peak, the controlled peak and the
 % reduction (SPEC 5), with the peak control force U in % of the total weight.
 
-Usage: python benchmarks/rig_table.py [--records-dir DIR] [--rig-effects] [--set KEY=VALUE ...] [--markdown]
+With ``--dry-runs`` it prints instead the source's experimental table as a dry run would
+predict it (issue 20): for each record, ideal control (``harness simulate``), a lockstep dry
+run on the force-source rig of earlier versions (first-order actuator, table a motion source)
+and a lockstep dry run on the servo-hydraulic rig (the shipped default): drift reduction per
+story, floor and base-mat acceleration reduction, sliding displacement over passive, and the
+peak force in % of the weight. Every reduction is against the same ideal passive simulation.
+
+Usage: python benchmarks/rig_table.py [--records-dir DIR] [--rig-effects] [--dry-runs] [--set KEY=VALUE ...] [--markdown]
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
@@ -24,7 +32,24 @@ from rich.table import Table  # noqa: E402
 
 from harness.peaks import reduction_pct  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
+from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
 from harness.runs.simulate import StudyOptions, run_study  # noqa: E402
+
+#: The rig of earlier versions: a force source with a first-order lag, the table a motion source.
+FORCE_SOURCE_RIG = ["rig.actuator.model=first_order", "rig.table.model=motion_source",
+                    "safety.force.velocity_feedback_Ns_per_m=0"]
+#: The columns of the dry-run table: (name, lockstep dry run's overrides, or None for ideal control).
+PREDICTIONS = (("ideal", None), ("force source", FORCE_SOURCE_RIG), ("servo-hydraulic", []))
+#: Rows of the dry-run table: (flattened peak key, label).
+PREDICTED = (
+    ("drift_1_m", "story 1 drift reduction %"),
+    ("drift_2_m", "story 2 drift reduction %"),
+    ("drift_3_m", "story 3 drift reduction %"),
+    ("floor_acceleration_1_m_s2", "floor 1 acceleration reduction %"),
+    ("floor_acceleration_2_m_s2", "floor 2 acceleration reduction %"),
+    ("floor_acceleration_3_m_s2", "floor 3 acceleration reduction %"),
+    ("base_acceleration_m_s2", "base mat acceleration reduction %"),
+)
 
 #: The rig's records and their peak table accelerations (g), SPEC 6b.
 RIG_RECORDS = (("el_centro", 0.34), ("hachinohe", 0.23), ("pacoima", 0.40))
@@ -84,9 +109,9 @@ def headers() -> list[str]:
     return names
 
 
-def print_markdown(rows: list[list[str]]) -> None:
+def print_markdown(rows: list[list[str]], names: list[str] | None = None) -> None:
     """The table as GitHub markdown, for benchmarks/README.md."""
-    names = headers()
+    names = names or headers()
     print("| " + " | ".join(names) + " |")
     print("|" + "---|" * len(names))
     for row in rows:
@@ -103,6 +128,53 @@ def print_rich(rows: list[list[str]], title: str) -> None:
     Console(width=200).print(table)
 
 
+def predictions(profile_path: Path, records_dir: str, overrides: list[str], log_dir: str) -> dict:
+    """Per record: the ideal passive peaks, and the controlled peaks of each column of :data:`PREDICTIONS`."""
+    results: dict = {}
+    for record, pga_g in RIG_RECORDS:
+        options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0, duration_s=30.0)
+        ideal = run_study(load_profile(profile_path, overrides=overrides), options)
+        results[record] = {"passive": ideal.cases["passive"].peaks.flatten()}
+        for name, rig in PREDICTIONS:
+            if rig is None:
+                results[record][name] = ideal.cases["controlled"].peaks.flatten()
+                continue
+            profile = load_profile(profile_path, overrides=[*overrides, *rig])
+            run = dry_run(profile, DryRunOptions(study=options, lockstep=True, show_console=False, compare=False,
+                                                 log_dir=log_dir))
+            outcome = run.session.outcome
+            print(f"{record} {name}: {outcome}", file=sys.stderr)
+            results[record][name] = {**run.peaks.flatten(), "outcome": str(outcome)}
+    return results
+
+
+def prediction_rows(results: dict) -> list[list[str]]:
+    """One row per predicted quantity: its label, then per record the value of each column."""
+    rows = []
+    for key, label in PREDICTED:
+        row = [label]
+        for record, _ in RIG_RECORDS:
+            passive = results[record]["passive"][key]
+            for name, _ in PREDICTIONS:
+                reduction = reduction_pct(passive, results[record][name][key])
+                row.append("-" if reduction is None else f"{reduction:.0f}")
+        rows.append(row)
+    ratio, force, outcome = ["sliding displacement / passive"], ["peak force % W"], ["outcome"]
+    for record, _ in RIG_RECORDS:
+        passive = results[record]["passive"]["sliding_displacement_m"]
+        for name, _ in PREDICTIONS:
+            peaks = results[record][name]
+            ratio.append(f"{peaks['sliding_displacement_m'] / passive:.2f}")
+            force.append(f"{peaks['peak_force_pct_weight']:.1f}")
+            outcome.append(peaks.get("outcome", "-").split(".")[-1].lower())
+    return [*rows, ratio, force, outcome]
+
+
+def prediction_headers() -> list[str]:
+    """Column headers of the dry-run table."""
+    return ["quantity", *(f"{record} {pga_g:.2f} g: {name}" for record, pga_g in RIG_RECORDS for name, _ in PREDICTIONS)]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--profile", default=str(REPO / "profiles" / "nceer_4dof.yaml"))
@@ -113,7 +185,15 @@ def main() -> int:
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
                         help="override a profile value, e.g. control.designs.phi.p1_per_s=0.315")
     parser.add_argument("--markdown", action="store_true", help="print markdown instead of a rich table")
+    parser.add_argument("--dry-runs", action="store_true",
+                        help="ideal control against lockstep dry runs on the force-source and the servo-hydraulic rig")
+    parser.add_argument("--log-dir", default=None, help="where the dry runs' folders go (default: a temporary folder)")
     args = parser.parse_args()
+    if args.dry_runs:
+        with tempfile.TemporaryDirectory() as scratch:
+            rows = prediction_rows(predictions(Path(args.profile), args.records_dir, args.overrides, args.log_dir or scratch))
+        print_markdown(rows, prediction_headers())
+        return 0
     results = rig_peaks(Path(args.profile), args.records_dir, args.rig_effects, args.overrides)
     rows = table_rows(results)
     if args.markdown:

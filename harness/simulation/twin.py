@@ -124,7 +124,7 @@ class _TwinRig:
         rig = profile.rig
         self.substep_s = rig.physics_substep_s
         self.substeps_per_sample = int(round(period_s / self.substep_s))
-        parts = RigParts.from_profile(profile)  # as the virtual rig: its true building and bearing; the controller keeps the design
+        parts = RigParts.from_profile(profile)  # as the virtual rig: its true structure and bearing, not the design
         self.table = TablePlant(parts.building, parts.bearing, motion, parts.rtol, rig)
         rng = np.random.default_rng(rig.seed if seed is None else seed)
         self.sensors = SensorModel(rig.sensors, self.substep_s, _MAX_SENSOR_DELAY_S, rng)
