@@ -92,6 +92,7 @@ class TablePlant:
         self.running = False
         self.record_time_s = 0.0
         self._held_time_s = 0.0
+        self._input = 0.0
         self.started = False
 
     @property
@@ -119,6 +120,7 @@ class TablePlant:
 
     def advance(self, t_s: float, h_s: float, force_N: float) -> None:
         """Advance the live plant over one sub-step ``[t_s, t_s + h_s)`` of rig time with the force held."""
+        self._input = force_N
         if self.running:
             r = self.record_time_s
             self.record.advance(r, r + h_s, force_N)
@@ -133,6 +135,12 @@ class TablePlant:
     def time_s(self) -> float:
         """The live plant's time (s): record time while the table plays, else the rig's."""
         return self.record_time_s if self.running else self._held_time_s
+
+    def table_truth(self) -> tuple[float, float, float]:
+        """Achieved table ``(x_0, xd_0, xdd_0)`` now (m, m/s, m/s^2), with the plant's last input held."""
+        live, t = self.live, self.time_s
+        x0, v0 = live.table_now(t)
+        return x0, v0, live.accelerations(t, self._input)[0]
 
     def drive(self) -> tuple[float, float, float]:
         """The table's drive ``(x_d, xd_d, xdd_d)`` now (m, m/s, m/s^2): the record, or the hold."""

@@ -28,7 +28,7 @@ def _run_folders(folder: Path) -> list[Path]:
 
 def test_identify_actuator_measures_the_first_order_actuator_in_both_conditions(tmp_path, capsys):
     out = tmp_path / "frf"
-    status = main(["identify", "actuator", "--out", str(out), "--both", *SHORT])
+    status = main(["identify", "actuator", "--out", str(out), "--both", "--variant", "force_source", *SHORT])
     printed = capsys.readouterr().out
     assert status == exit_codes.OK, printed
     assert printed.count("outcome: completed") == 2
@@ -38,7 +38,7 @@ def test_identify_actuator_measures_the_first_order_actuator_in_both_conditions(
         response = read_frf_csv(out / name)
         assert response.freq_hz[0] >= 1.0 and response.freq_hz[-1] <= 30.0  # restricted to the band
         assert len(response.freq_hz) >= 25
-        # Today's actuator: a 10 ms first-order lag (and the loop's delay) -> unit gain at low
+        # The force-source variant: a 10 ms first-order lag (and the loop's delay) -> unit gain at low
         # frequency, about -3 dB near 16 Hz, a lag that grows with frequency.
         assert response.magnitude[0] == pytest.approx(1.0, abs=0.05)
         top = float(np.interp(30.0, response.freq_hz, response.magnitude))

@@ -48,7 +48,8 @@ def recorded(monkeypatch):
 
 def _twin(monkeypatch, recorded, overrides: tuple[str, ...]):
     monkeypatch.setattr(twin_module, "FrictionEstimator", recorded)
-    profile = load_profile(PROFILES / "nceer_4dof.yaml", overrides=overrides)
+    # The force-source rig: the servo-hydraulic actuator's velocity feedback would dominate the force.
+    profile = load_profile(PROFILES / "nceer_4dof.yaml", variant="force_source", overrides=overrides)
     motion = load_motion(profile.record, base_dir=profile.base_dir, name="synthetic", duration_s=3.0)
     controller = build_controller_for_rig(profile, "phi")
     return controller, run_rig_twin(profile, motion, RATE_HZ, controller)

@@ -14,8 +14,8 @@ from tests.conftest import PROFILES
 RATE_HZ = 500.0
 
 
-def _twin(overrides: tuple[str, ...] = (), duration_s: float = 2.0):
-    profile = load_profile(PROFILES / "nceer_4dof.yaml", overrides=overrides)
+def _twin(overrides: tuple[str, ...] = (), duration_s: float = 2.0, variant: str | None = None):
+    profile = load_profile(PROFILES / "nceer_4dof.yaml", variant=variant, overrides=overrides)
     motion = load_motion(profile.record, base_dir=profile.base_dir, name="synthetic", duration_s=duration_s)
     return motion, run_rig_twin(profile, motion, RATE_HZ, build_controller_for_rig(profile, "phi"))
 
@@ -35,7 +35,7 @@ def test_twin_columns_follow_the_row_layout_and_hold_the_last_sample():
 def test_a_trip_ends_the_twin_after_the_tripping_sample():
     stroke = ("safety.stroke.hard_limit_m=0.012", "safety.stroke.soft_limit_m=0.008",
               "safety.stroke.fade_band_m=0.002", "safety.stroke.arm_tolerance_m=0.001")
-    motion, result = _twin(stroke, duration_s=6.0)
+    motion, result = _twin(stroke, duration_s=6.0, variant="force_source")  # its stroke follows the table
     assert result.extra["outcome"] == "tripped" and result.extra["trip_reason"]
     t = result.columns["t_s"]
     assert len(t) < round(motion.duration_s * RATE_HZ) + 1
