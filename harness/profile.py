@@ -47,10 +47,9 @@ from harness.rig.config import RigConfig
 from harness.safety.config import SafetyConfig, check_config
 from harness.safety.weakening import Weakening, weakenings
 from harness.schema import build, internal, quantity, to_data
-from harness.yamlload import DuplicateKeyError, load_unique
+from harness.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
 
 DEFAULT_PROFILE = PROFILE_DIR / "nceer_4dof.yaml"
-_MAX_FILE_BYTES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -145,8 +144,9 @@ def _read_yaml(path: Path) -> dict:
         raise ProfileError(f"{state}; expected an existing YAML file (shipped profiles: {known})", source)
     try:
         size = path.stat().st_size
-        if size > _MAX_FILE_BYTES:
-            raise ProfileError(f"file is {size} bytes; expected a profile under {_MAX_FILE_BYTES} bytes", source)
+        if size > MAX_YAML_CHARS:
+            raise ProfileError(f"file is {size} bytes; expected a profile of at most {MAX_YAML_CHARS} bytes (MAX_YAML_CHARS)",
+                               source)
         raw = path.read_bytes()
     except OSError as err:
         raise ProfileError(f"cannot read it ({err.strerror or err}); expected a readable YAML file", source) from err
