@@ -37,6 +37,7 @@ from harness.paths import LOG_DIR
 from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.recording import load_run
+from harness.recording.runfolder import check_log_dir
 from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, run_session
 from harness.runs.simulate import (
@@ -238,6 +239,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         show_console=options.show_console,
         metadata={"record": motion_facts(motion)},
     )
+    check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
     rig = rig_link = process = None
     switch_interval = sys.getswitchinterval()
     try:
