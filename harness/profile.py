@@ -224,19 +224,19 @@ def parse_overrides(items: list[str] | tuple[str, ...]) -> dict:
     for item in items:
         key, sep, text = item.partition("=")
         if not sep or not key.strip() or any(not part.strip() for part in key.strip().split(".")):
-            raise ProfileError(f"override {item!r}: expected KEY.PATH=VALUE, e.g. safety.stroke.hard_limit_m=0.02", "--set")
+            raise ProfileError(f"override {_shown(item)}: expected KEY.PATH=VALUE, e.g. safety.stroke.hard_limit_m=0.02", "--set")
         try:
             value = load_unique(text) if text.strip() else ""
         except DuplicateKeyError as err:
-            raise ProfileError(f"override {item!r}: in the value, {err.describe()}", "--set") from err
+            raise ProfileError(f"override {_shown(item)}: in the value, {err.describe()}", "--set") from err
         except yaml.YAMLError as err:
             problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-            raise ProfileError(f"override {item!r}: the value is not valid YAML ({problem})", "--set") from err
+            raise ProfileError(f"override {_shown(item)}: the value is not valid YAML ({problem})", "--set") from err
         parts = tuple(part.strip() for part in key.strip().split("."))
         clash = next((earlier for path, earlier in given.items() if _overlaps(path, parts)), None)
         if clash is not None:
             raise ProfileError(
-                f"override {item!r} sets {'.'.join(parts)} again after {clash!r}; expected each key once "
+                f"override {_shown(item)} sets {'.'.join(parts)} again after {_shown(clash)}; expected each key once "
                 "(the later value would silently replace the earlier)", "--set",
             )
         given[parts] = item
@@ -245,6 +245,11 @@ def parse_overrides(items: list[str] | tuple[str, ...]) -> dict:
             node = node.setdefault(part, {})
         node[parts[-1]] = value
     return result
+
+
+def _shown(item: str) -> str:
+    """An override as a message quotes it: ``repr``, cut to 80 characters before it is built (a value may be megabytes)."""
+    return repr(item) if len(item) <= 80 else repr(item[:77]) + "..."
 
 
 def _overlaps(a: tuple[str, ...], b: tuple[str, ...]) -> bool:

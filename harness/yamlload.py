@@ -40,7 +40,7 @@ _MERGE_TAG = "tag:yaml.org,2002:merge"
 #: room for any hand-written file while a mistaken file (a log, a data set) is refused at once.
 MAX_YAML_CHARS = 1_000_000
 
-#: Deepest nesting of lists and mappings (the top-level mapping is level 1). The shipped
+#: Deepest nesting of values (the top-level mapping is level 1, a value in it level 2, ...). The shipped
 #: profiles and studies reach 5-7 levels (``variants.NAME.control.designs.NAME.KEY``). Every
 #: level costs the loader and the code that walks the data a few Python frames (composing,
 #: constructing, the schema's ``build``, the deep copy of a merge: 3 to 6 each), so 32 levels,
@@ -139,7 +139,7 @@ def check_expansion(root: yaml.Node) -> tuple[int, int]:
                 )
             if level > MAX_DEPTH:
                 raise YamlLimitError(
-                    f"lists and mappings nested deeper than {MAX_DEPTH} levels once the aliases are expanded; "
+                    f"values nested deeper than {MAX_DEPTH} levels once the aliases are expanded; "
                     f"expected at most {MAX_DEPTH} (MAX_DEPTH)", node.start_mark,
                 )
             open_nodes.add(key)
@@ -155,7 +155,7 @@ def check_expansion(root: yaml.Node) -> tuple[int, int]:
         values, height = known
         if level + height - 1 > MAX_DEPTH:
             raise YamlLimitError(
-                f"lists and mappings nested {level + height - 1} levels deep once the aliases are expanded; "
+                f"values nested {level + height - 1} levels deep once the aliases are expanded; "
                 f"expected at most {MAX_DEPTH} (MAX_DEPTH)", node.start_mark,
             )
         if values > MAX_VALUES:
@@ -189,7 +189,7 @@ class UniqueKeyLoader(yaml.SafeLoader):
         try:
             if self._depth > MAX_DEPTH:
                 raise YamlLimitError(
-                    f"lists and mappings nested deeper than {MAX_DEPTH} levels; expected at most {MAX_DEPTH} (MAX_DEPTH)",
+                    f"values nested deeper than {MAX_DEPTH} levels; expected at most {MAX_DEPTH} (MAX_DEPTH)",
                     self.peek_event().start_mark,
                 )
             return super().compose_node(parent, index)
