@@ -38,6 +38,26 @@ MAX_TIME_SCALE = 10.0
 #: gets about 75 MB.
 MAX_DURATION_S = 600.0
 
+#: Fewest samples a run or a simulation covers, of the record and of the loop alike: a record of
+#: fewer is refused (:data:`harness.motions.checks.MIN_SAMPLES` is this number), and so is a run
+#: shorter than this many loop periods (a 0.5 s simulation at 1 Hz reported zero for every peak).
+#: ``--duration`` therefore has a lower bound besides the range above: this many samples of the
+#: record (0.05 s for the synthetic record at time scale 2) and this many periods (0.02 s at 500 Hz).
+MIN_RUN_SAMPLES = 10
+
+#: Loop periods that must fit in the stall budget (``safety.run.max_stall_s``): the shortest
+#: stall, one missed deadline, is a gap of two periods between two ticks, and the loop is meant
+#: to ride such a stall through. With a period longer than half the budget every late tick trips
+#: ``loop_stall`` (a dry run at 50 Hz, a 20 ms period against the 20 ms budget, tripped on its
+#: sixth tick). docs/SAFETY.md, "Stall budget".
+STALL_BUDGET_PERIODS = 2.0
+
+#: Loop periods that must fit in the drive's watchdog (``rig.drive.watchdog_timeout_s``): a
+#: command reaches the drive within one more period (the rig is serviced once a period), so the
+#: drive sees a command at most two periods old; a longer period disables the drive between
+#: commands and the run cannot arm (``--rate 10``: "drive fault=True"). docs/SAFETY.md, "Stall budget".
+WATCHDOG_PERIODS = 2.0
+
 #: Longest transport delay (s): the rig's sensor and actuator delays share this bound
 #: (``rig.*.delay_s <= 1``); a delay line holds one slot per sub-step, and a delay of a second is
 #: already longer than the fundamental period of the isolated building, beyond any useful feedback.

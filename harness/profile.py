@@ -48,10 +48,9 @@ from harness.rig.truth import RigTruth, resolve_truth
 from harness.safety.config import SafetyConfig, check_config
 from harness.safety.weakening import Weakening, weakenings
 from harness.schema import build, internal, quantity, to_data
-from harness.yamlload import DuplicateKeyError, load_unique
+from harness.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
 
 DEFAULT_PROFILE = PROFILE_DIR / "nceer_4dof.yaml"
-_MAX_FILE_BYTES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -155,8 +154,9 @@ def _read_yaml(path: Path) -> dict:
         raise ProfileError(f"{state}; expected an existing YAML file (shipped profiles: {known})", source)
     try:
         size = path.stat().st_size
-        if size > _MAX_FILE_BYTES:
-            raise ProfileError(f"file is {size} bytes; expected a profile under {_MAX_FILE_BYTES} bytes", source)
+        if size > MAX_YAML_CHARS:
+            raise ProfileError(f"file is {size} bytes; expected a profile of at most {MAX_YAML_CHARS} bytes (MAX_YAML_CHARS)",
+                               source)
         raw = path.read_bytes()
     except OSError as err:
         raise ProfileError(f"cannot read it ({err.strerror or err}); expected a readable YAML file", source) from err
@@ -234,20 +234,20 @@ def parse_overrides(items: list[str] | tuple[str, ...]) -> dict:
     for item in items:
         key, sep, text = item.partition("=")
         if not sep or not key.strip() or any(not part.strip() for part in key.strip().split(".")):
-            raise ProfileError(f"override {item!r}: expected KEY.PATH=VALUE, e.g. safety.stroke.hard_limit_m=0.02", "--set")
+            raise ProfileError(f"override {_shown(item)}: expected KEY.PATH=VALUE, e.g. safety.stroke.hard_limit_m=0.02", "--set")
         try:
             value = load_unique(text) if text.strip() else ""
         except DuplicateKeyError as err:
-            raise ProfileError(f"override {item!r}: in the value, {err.describe()}", "--set") from err
+            raise ProfileError(f"override {_shown(item)}: in the value, {err.describe()}", "--set") from err
         except yaml.YAMLError as err:
             problem = getattr(err, "problem", None) or str(err).splitlines()[0]
             hint = "; expected a list as [v1, v2, ...], e.g. [0.6e6, 2.1e6, 1.5e6]" if text.lstrip().startswith("[") else ""
-            raise ProfileError(f"override {item!r}: the value is not valid YAML ({problem}){hint}", "--set") from err
+            raise ProfileError(f"override {_shown(item)}: the value is not valid YAML ({problem}){hint}", "--set") from err
         parts = tuple(part.strip() for part in key.strip().split("."))
         clash = next((earlier for path, earlier in given.items() if _overlaps(path, parts)), None)
         if clash is not None:
             raise ProfileError(
-                f"override {item!r} sets {'.'.join(parts)} again after {clash!r}; expected each key once "
+                f"override {_shown(item)} sets {'.'.join(parts)} again after {_shown(clash)}; expected each key once "
                 "(the later value would silently replace the earlier)", "--set",
             )
         given[parts] = item
@@ -256,6 +256,11 @@ def parse_overrides(items: list[str] | tuple[str, ...]) -> dict:
             node = node.setdefault(part, {})
         node[parts[-1]] = value
     return result
+
+
+def _shown(item: str) -> str:
+    """An override as a message quotes it: ``repr``, cut to 80 characters before it is built (a value may be megabytes)."""
+    return repr(item) if len(item) <= 80 else repr(item[:77]) + "..."
 
 
 def _overlaps(a: tuple[str, ...], b: tuple[str, ...]) -> bool:

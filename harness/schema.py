@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import reprlib
 import types
 import typing
 from collections.abc import Mapping
@@ -68,9 +69,27 @@ def quantity(
     return dataclasses.field(default=default, metadata=metadata)
 
 
+#: Longest quotation of a value in a message (characters).
+DESCRIBE_CHARS = 60
+
+#: Reprs of values for messages, bounded before they are built: a message quotes what was found,
+#: and a value of a YAML file can be a list of lists that aliases make a billion strings long.
+#: At most 3 levels, 4 items per list or mapping and 60 characters per string are looked at, so
+#: a quotation costs the same whatever the value holds (at most 4^3 leaves).
+_BOUNDED_REPR = reprlib.Repr()
+_BOUNDED_REPR.maxlevel = 3
+_BOUNDED_REPR.maxlist = _BOUNDED_REPR.maxtuple = _BOUNDED_REPR.maxdict = _BOUNDED_REPR.maxset = 4
+_BOUNDED_REPR.maxstring = _BOUNDED_REPR.maxother = _BOUNDED_REPR.maxlong = DESCRIBE_CHARS
+
+
 def _describe(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+    """``repr(value)`` cut to :data:`DESCRIBE_CHARS` characters, without building the whole of it.
+
+    reprlib elides what lies beyond the bounds of :data:`_BOUNDED_REPR` ("..."), so the cost
+    and the size of the text do not grow with the value.
+    """
+    text = _BOUNDED_REPR.repr(value)
+    return text if len(text) <= DESCRIBE_CHARS else text[: DESCRIBE_CHARS - 3] + "..."
 
 
 def _expected_range(meta: Mapping[str, Any], unit: str | None) -> str:

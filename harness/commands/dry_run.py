@@ -9,10 +9,13 @@ from rich.markup import escape
 
 from harness.commands.options import (
     EPILOG,
+    LOOP_RATE_HELP,
     RATE,
     add_bus_options,
     add_profile_options,
     add_record_options,
+    check_loop_rate,
+    check_run_length,
     load_acknowledged,
     non_empty,
     number_in,
@@ -57,7 +60,8 @@ def add_parser(sub) -> None:
     add_bus_options(parser)
     loop = parser.add_argument_group("loop")
     loop.add_argument("--rate", type=number_in(RATE), metavar="HZ",
-                      help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}")
+                      help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}{LOOP_RATE_HELP}; "
+                      "a whole number of rig.physics_substep_s per period")
     loop.add_argument("--controller", type=non_empty, metavar="NAME",
                       help="a design of the profile (default: control.controller)")
     loop.add_argument("--lockstep", action="store_true",
@@ -72,10 +76,15 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import DryRunOptions, dry_run
+    from harness.runs.simulate import resolve_profile
 
     profile = load_acknowledged(args, console)
+    study = study_options(args, controller=args.controller, rate_hz=args.rate)
+    resolved = resolve_profile(profile, study)  # dry_run resolves it again; checked here, before anything starts
+    check_loop_rate(resolved, args.rate is not None, virtual_rig=True)
+    check_run_length(resolved, args)
     options = DryRunOptions(
-        study=study_options(args, controller=args.controller, rate_hz=args.rate), interface=args.interface,
+        study=study, interface=args.interface,
         channel=args.channel, log_dir=args.log_dir, lockstep=args.lockstep, external_rig=args.external_rig,
         show_console=not args.quiet,
     )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import textwrap
 from collections.abc import Callable
 from pathlib import Path
@@ -154,12 +155,19 @@ def output_file(text: str) -> str:
 
 
 def output_dir(text: str) -> str:
-    """An argparse ``type=`` for a directory the command writes into (created if missing): not a file."""
-    path = Path(text).expanduser()
+    """An argparse ``type=`` for a directory the command writes into (created if missing): writable, not a file.
+
+    Writability is tried (:func:`harness.writable.directory_problem`), so ``--log-dir /proc/1``
+    is refused here, before a bus is opened or a rig started, and not by the run folder's
+    ``mkdir`` once the run has begun.
+    """
+    from harness.writable import directory_problem
+
     if not text.strip():
         raise argparse.ArgumentTypeError("found an empty path, expected a directory")
-    if path.exists() and not path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text} is a file, expected a directory (existing or to be created)")
+    problem = directory_problem(text)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(problem)
     return text
 
 
@@ -171,7 +179,8 @@ def add_record_options(parser: argparse.ArgumentParser) -> None:
                        help=f"scale to this peak table acceleration (g), {PGA.describe()}")
     group.add_argument("--time-scale", type=number_in(TIME_SCALE), metavar="F",
                        help=f"compress time by F (2 = twice the frequency), {TIME_SCALE.describe()}")
-    group.add_argument("--duration", type=number_in(DURATION), metavar="S", help=f"run length (s), {DURATION.describe()}")
+    group.add_argument("--duration", type=number_in(DURATION), metavar="S",
+                       help=f"run length (s), {DURATION.describe()}{DURATION_HELP}")
 
 
 def add_bus_options(parser: argparse.ArgumentParser) -> None:
@@ -204,6 +213,140 @@ def add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> N
         help="accept --set values that weaken the profile's own safety settings; each is recorded in metadata.json, "
         "on the live console and in the outcome (docs/SAFETY.md). Without it such a run is refused",
     )
+
+
+#: What --rate of a loop command (run, dry-run) must also meet, for --help: the bounds :func:`check_loop_rate` derives.
+LOOP_RATE_HELP = (
+    f"; and at least {limits.STALL_BUDGET_PERIODS:g} / safety.run.max_stall_s, {limits.WATCHDOG_PERIODS:g} / "
+    "rig.drive.watchdog_timeout_s and 1 / safety.sensors.max_sensor_age_s (100 Hz for the shipped profiles), "
+    "in lockstep too"
+)
+#: What --duration must also meet, for --help: the record loader's bound (all commands) and :func:`check_run_length`.
+RECORD_DURATION_HELP = f"; and at least {limits.MIN_RUN_SAMPLES} samples of the record"
+DURATION_HELP = f"{RECORD_DURATION_HELP} and {limits.MIN_RUN_SAMPLES} periods of the control rate"
+
+
+def _given_as(option: str, given: bool, profile, key: str) -> tuple[str, str | None]:
+    """(source, key path) of a :class:`ProfileError` about a value: the option if it was given, else the profile's key."""
+    return (option, None) if given else (profile.source_path, key)
+
+
+def check_loop_rate(profile, rate_given: bool, *, virtual_rig: bool) -> None:
+    """Refuse a loop rate at which a run or a dry run could not arm, or not hold the loop, before anything starts.
+
+    The range of ``--rate`` says what the parser accepts; a loop also needs its period short
+    enough for what the profile's safety settings expect of it (harness/input_limits.py
+    derives each):
+
+    - :data:`~harness.input_limits.STALL_BUDGET_PERIODS` periods within ``safety.run.max_stall_s``;
+    - :data:`~harness.input_limits.WATCHDOG_PERIODS` periods within ``rig.drive.watchdog_timeout_s``;
+    - the sensor frames' period (``can.sensor_rate_hz``, which ``--rate`` sets) within
+      ``safety.sensors.max_sensor_age_s``: a sample is up to a period old when a tick reads it;
+    - for the virtual rig of a dry run, a whole number of ``rig.physics_substep_s`` per period.
+
+    A lockstep dry run is held to the same bounds: it rehearses the real-time loop at the
+    same rate, so a rate that loop cannot hold would rehearse nothing (and far below them the
+    rig's step of period / ``physics_substep_s`` sub-steps outgrows ``loop.lockstep_timeout_s``:
+    ``--rate 0.001`` asked for two million a step, and the dry run could not arm).
+
+    Parameters
+    ----------
+    profile : Profile
+        Resolved: ``--rate`` already folded in (``resolve_profile``).
+    rate_given : bool
+        True if ``--rate`` set the rate (the message then names it; else ``loop.rate_hz``).
+    virtual_rig : bool
+        True for a dry run.
+
+    Raises
+    ------
+    ProfileError
+        Naming ``--rate`` (or ``loop.rate_hz``), the rate found, the least rate accepted and why.
+    """
+    from harness.errors import ProfileError
+
+    rate_hz = profile.loop.rate_hz
+    period_s = 1.0 / rate_hz
+    source, key = _given_as("--rate", rate_given, profile, "loop.rate_hz")
+    bounds = (
+        ("safety.run.max_stall_s", profile.safety.run.max_stall_s, limits.STALL_BUDGET_PERIODS,
+         "the shortest stall, one missed deadline, is two periods between ticks"),
+        ("rig.drive.watchdog_timeout_s", profile.rig.drive.watchdog_timeout_s, limits.WATCHDOG_PERIODS,
+         "the drive disables itself when no command reaches it for that long"),
+    )
+    too_slow = [(name, value, periods, why) for name, value, periods, why in bounds if period_s * periods > value * (1 + 1e-9)]
+    if too_slow:
+        least_hz = max(periods / value for _, value, periods, _ in bounds)
+        reasons = "; ".join(f"{periods:g} periods must fit in {name} ({value * 1e3:g} ms: {why})"
+                            for name, value, periods, why in too_slow)
+        raise ProfileError(
+            f"found {rate_hz:g} Hz (a period of {period_s * 1e3:g} ms), expected at least {least_hz:g} Hz: {reasons} "
+            "(docs/SAFETY.md, Stall budget; lockstep too is held to this, as it rehearses the real-time loop)", source, key,
+        )
+    sensor_period_s = 1.0 / profile.can.sensor_rate_hz
+    age_s = profile.safety.sensors.max_sensor_age_s
+    if sensor_period_s > age_s * (1 + 1e-9):
+        source, key = _given_as("--rate", rate_given, profile, "can.sensor_rate_hz")
+        raise ProfileError(
+            f"found sensor frames every {sensor_period_s * 1e3:g} ms ({profile.can.sensor_rate_hz:g} Hz), expected at "
+            f"least {1.0 / age_s:g} Hz: a sample is up to a period old when a tick reads it, and "
+            f"safety.sensors.max_sensor_age_s is {age_s * 1e3:g} ms", source, key,
+        )
+    if virtual_rig:
+        _check_rig_substeps(profile, period_s, source, key)
+
+
+def _check_rig_substeps(profile, period_s: float, source: str, key: str | None) -> None:
+    """The virtual rig steps whole physics sub-steps per loop period (else its process exits once the run began)."""
+    from harness.errors import ProfileError
+
+    substep_s = profile.rig.physics_substep_s
+    steps = round(period_s / substep_s)
+    if steps >= 1 and abs(steps * substep_s - period_s) <= 1e-9 * period_s:
+        return
+    fewer = max(1, math.floor(period_s / substep_s))
+    nearby = sorted({1.0 / (n * substep_s) for n in (fewer, fewer + 1)}, reverse=True)
+    raise ProfileError(
+        f"found {profile.loop.rate_hz:g} Hz: its period of {period_s * 1e3:g} ms is not a whole number of the virtual "
+        f"rig's physics sub-steps (rig.physics_substep_s = {substep_s * 1e3:g} ms); expected a rate such as "
+        + " or ".join(f"{rate:g} Hz" for rate in nearby), source, key,
+    )
+
+
+def check_run_length(profile, args: argparse.Namespace) -> None:
+    """Refuse a run or simulation shorter than :data:`~harness.input_limits.MIN_RUN_SAMPLES` control periods.
+
+    The record's own lower bound (as many samples of the record) is checked where the record is
+    loaded (``harness.motions.config``). A profile without ``record.duration_s`` runs the whole
+    record, which has at least that many samples.
+
+    Parameters
+    ----------
+    profile : Profile
+        The profile the command loaded.
+    args : argparse.Namespace
+        Its options: ``duration`` and ``rate`` win over the profile's ``record.duration_s`` and
+        ``control.rate_hz`` when given.
+
+    Raises
+    ------
+    ProfileError
+        Naming ``--duration`` (or ``record.duration_s``), the length found and the least accepted.
+    """
+    from harness.errors import ProfileError
+
+    given = getattr(args, "duration", None)
+    duration_s = given if given is not None else profile.record.duration_s
+    if duration_s is None:
+        return
+    rate_hz = getattr(args, "rate", None) or profile.control.rate_hz
+    shortest_s = limits.MIN_RUN_SAMPLES / rate_hz
+    if duration_s < shortest_s * (1 - 1e-9):
+        source, key = _given_as("--duration", given is not None, profile, "record.duration_s")
+        raise ProfileError(
+            f"found {duration_s:g} s, expected at least {shortest_s:g} s: {limits.MIN_RUN_SAMPLES} periods of the "
+            f"{rate_hz:g} Hz control rate (a shorter run has too few samples for its peaks to mean anything)", source, key,
+        )
 
 
 def study_options(args: argparse.Namespace, **extra):

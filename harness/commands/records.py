@@ -15,6 +15,7 @@ from harness import exit_codes
 from harness.commands.options import (
     DURATION,
     PGA,
+    RECORD_DURATION_HELP,
     SIMULATE_EPILOG,
     TIME_SCALE,
     add_overrides,
@@ -59,7 +60,7 @@ def add_parser(sub) -> None:
     parser.add_argument("--time-scale", type=number_in(TIME_SCALE), metavar="F",
                         help=f"compress time by F, {TIME_SCALE.describe()}")
     parser.add_argument("--duration", type=number_in(DURATION), metavar="S",
-                        help=f"cut to this length (s), {DURATION.describe()}")
+                        help=f"cut to this length (s), {DURATION.describe()}{RECORD_DURATION_HELP}")
     parser.add_argument("--plot", nargs="?", const=DEFAULT_PLOT, type=_plot_file, metavar="PNG",
                         help="write a plot of the raw and processed motion and their spectra (default: NAME_motion.png)")
     parser.set_defaults(handler=run)

@@ -10,10 +10,13 @@ from rich.markup import escape
 from harness import exit_codes
 from harness.commands.options import (
     EPILOG,
+    LOOP_RATE_HELP,
     RATE,
     add_bus_options,
     add_profile_options,
     add_record_options,
+    check_loop_rate,
+    check_run_length,
     load_acknowledged,
     non_empty,
     number_in,
@@ -65,7 +68,7 @@ def add_parser(sub) -> None:
     add_record_options(parser)
     add_bus_options(parser)
     parser.add_argument("--rate", type=number_in(RATE), metavar="HZ",
-                        help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}")
+                        help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}{LOOP_RATE_HELP}")
     parser.add_argument("--controller", type=non_empty, metavar="NAME", help="a design of the profile")
     parser.add_argument("--yes", action="store_true", help="do not ask before arming")
     parser.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
@@ -82,6 +85,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
 
     profile = load_acknowledged(args, console)
     profile = resolve_profile(profile, study_options(args, controller=args.controller, rate_hz=args.rate))
+    check_loop_rate(profile, args.rate is not None, virtual_rig=False)
+    check_run_length(profile, args)
     motion = prepare_motion(profile)
     rate = profile.control.rate_hz
     can = profile.can_settings(args.interface, args.channel)

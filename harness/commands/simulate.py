@@ -21,6 +21,7 @@ from harness.commands.options import (
     add_overrides,
     add_profile_argument,
     add_record_options,
+    check_run_length,
     non_empty,
     number_in,
     output_dir,
@@ -95,6 +96,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.runs.simulate_batch import split_list
 
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
+    check_run_length(profile, args)
     records, controllers = split_list(args.record), split_list(args.controller)
     if len(records) > 1 or len(controllers) > 1:
         return run_batch_command(args, console, profile, records, controllers)

@@ -127,20 +127,49 @@ def run(args: argparse.Namespace, console: Console) -> int:
 
 
 def _sweep(args: argparse.Namespace, console: Console) -> int:
-    from harness.sweep.cases import base_of, expand
+    from harness.sweep.cases import base_of, case_count, expand
     from harness.sweep.study import load_study
 
     study = load_study(args.study)
     if args.records_dir:
         options = dataclasses.replace(study.options, records_dir=str(Path(args.records_dir).expanduser().resolve()))
         study = dataclasses.replace(study, options=options)
+    count = case_count(study)  # from the axes alone, at once; refuses a study beyond MAX_CASES before it is built
+    folder = Path(args.out) if args.out else Path("logs") / "sweeps" / study.name
+    if args.plan:
+        console.print(f"[bold]{study.name}[/]: {count.total} cases ({count.describe()})", highlight=False)
+        return _plan(args, console, study, folder)
     with console.status(f"expanding {study.name} and checking every value on the profile ..."):
         cases = expand(study)
     base = base_of(study)
     if args.case:
         return _show_case(cases, base, args.case, console)
-    folder = Path(args.out) if args.out else Path("logs") / "sweeps" / study.name
     return _run_cases(args, console, study, cases, folder)
+
+
+def _plan(args: argparse.Namespace, console: Console, study, folder: Path) -> int:
+    """``--plan``: the cases already in ``folder`` and those to run, after checking every value; nothing is written.
+
+    The count came from the axes (printed at once); the cases are then built, within
+    ``MAX_CASES``, to check each value on the profile and to match them with the rows by key.
+    """
+    from harness.sweep.cases import expand
+    from harness.sweep.driver import STUDY_COPY, plan, refuse_other_study
+    from harness.sweep.store import ResultStore
+
+    has_results = (folder / STUDY_COPY).is_file()
+    if has_results:
+        refuse_other_study(folder, study)
+    with console.status(f"checking every value of {study.name} on the profile ..."):
+        cases = expand(study)
+    if not has_results:
+        console.print(f"[bold]{study.name}[/]: {len(cases)} cases, 0 already in {folder} (no results there yet), "
+                      f"{len(cases)} to run", highlight=False)
+        return exit_codes.OK
+    todo = plan(cases, ResultStore(folder), args.retry_failed)
+    console.print(f"[bold]{study.name}[/]: {len(cases)} cases, {todo.skipped} already in {folder}, {len(todo.todo)} to run",
+                  highlight=False)
+    return exit_codes.OK
 
 
 def _show_case(cases, base, prefix: str, console: Console) -> int:
@@ -162,7 +191,7 @@ def _run_cases(args: argparse.Namespace, console: Console, study, cases, folder:
         console.print(f"[bold]{study.name}[/]: {len(cases)} cases, {todo.skipped} already in {folder}, "
                       f"{len(todo.todo)} to run; results as {store.format}"
                       + ("" if store.parquet else " (pyarrow is not installed: pip install pyarrow for Parquet)"))
-        if args.plan or not todo.todo:
+        if not todo.todo:
             return _finish(args, console, folder, store, None)
         runner = CaseRunner(base, simulate_case)
         engine = _engine(args, console, runner)

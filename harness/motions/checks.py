@@ -7,10 +7,11 @@ from pathlib import Path
 import numpy as np
 
 from harness.errors import RecordError
+from harness.input_limits import MIN_RUN_SAMPLES
 from harness.motions.accel_units import G_M_S2, accel_factor
 
-#: Fewest samples a record may have.
-MIN_SAMPLES = 10
+#: Fewest samples a record may have, and a run of it cover (harness/input_limits.py says why).
+MIN_SAMPLES = MIN_RUN_SAMPLES
 #: Largest |acceleration| a record may contain (g); larger values mean a unit mistake.
 MAX_ABS_ACCEL_G = 10.0
 #: Allowed deviation of a time stamp from the uniform grid, as a fraction of the step.

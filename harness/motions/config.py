@@ -30,6 +30,7 @@ from harness.motions.catalog import (
     resolve_record,
     synthetic_seed,
 )
+from harness.motions.checks import MIN_SAMPLES
 from harness.motions.loaders import RawRecord, load_record
 from harness.motions.processing import GroundMotion, process_record
 from harness.motions.synthetic import synthetic_record
@@ -163,6 +164,8 @@ def load_raw_and_motion(
     duration = duration_s if duration_s is not None else config.duration_s
     target = pga_g if pga_g is not None else config.pga_g
     records_dir = records_dir_from(records_dir_flag, config.records_dir, env, base_dir=base_dir)
+    if synthetic_seed(chosen_name) is not None:  # its time step is known before it is made
+        _check_duration(duration, SYNTHETIC_DT_S, scale, chosen_name)
     raw = load_raw(
         chosen_name,
         records_dir,
@@ -171,6 +174,7 @@ def load_raw_and_motion(
         synthetic_duration_s=(duration or DEFAULT_SYNTHETIC_DURATION_S) * scale,
         synthetic_pga_g=target or DEFAULT_SYNTHETIC_PGA_G,
     )
+    _check_duration(duration, raw.dt_s, scale, chosen_name)
     motion = process_record(raw, pga_g=target, time_scale=scale, duration_s=duration)
     if motion.duration_s > MAX_DURATION_S:
         raise RecordError(
@@ -178,6 +182,30 @@ def load_raw_and_motion(
             f"{MAX_DURATION_S:g} s (what a run or a simulation may allocate); cut it with --duration or record.duration_s"
         )
     return raw, motion
+
+
+def _check_duration(duration_s: float | None, raw_dt_s: float, time_scale: float, name: str) -> None:
+    """Refuse a run length shorter than :data:`MIN_SAMPLES` samples of the record, naming where it was given.
+
+    The record's step after the time scale is ``raw_dt_s / time_scale``; the range of ``--duration``
+    cannot say it, so the option and the profile key are named here (the records' own checks
+    speak of a synthetic record's uncompressed length, which the user never typed).
+
+    Raises
+    ------
+    RecordError
+        With the length found, the least accepted, and why.
+    """
+    if duration_s is None:
+        return
+    dt_s = raw_dt_s / time_scale
+    shortest_s = MIN_SAMPLES * dt_s
+    if not duration_s >= shortest_s * (1.0 - 1e-9):
+        raise RecordError(
+            f"record {name!r}: found a run length (--duration or record.duration_s) of {duration_s:g} s, expected at "
+            f"least {shortest_s:g} s: {MIN_SAMPLES} samples of the record, {dt_s:g} s each after the time scale of "
+            f"{time_scale:g}"
+        )
 
 
 def resolve_record_name(name: str, base_dir: str | Path) -> str:

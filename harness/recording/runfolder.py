@@ -270,14 +270,36 @@ class RunFolder:
         return self._writer.drops()
 
 
+def check_log_dir(log_dir: Path | str) -> None:
+    """Refuse a log directory where run folders cannot be created; call it before the bus opens.
+
+    Raises
+    ------
+    RunFolderError
+        Saying what is wrong with it (a file, below a file, not writable) and what was expected.
+    """
+    from harness.writable import directory_problem
+
+    problem = directory_problem(log_dir)
+    if problem is not None:
+        raise RunFolderError(f"log directory {problem}")
+
+
 def _unique_folder(log_dir: Path, base: str) -> Path:
-    log_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        log_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as err:  # checked before the run (check_log_dir); the disk can still change under it
+        raise RunFolderError(f"cannot create the log directory ({err.strerror or err}), expected a writable directory",
+                             str(log_dir)) from err
     for index in range(1, 1000):
         candidate = log_dir / (base if index == 1 else f"{base}-{index}")
         try:
             candidate.mkdir()
         except FileExistsError:
             continue
+        except OSError as err:
+            raise RunFolderError(f"cannot create a run folder in it ({err.strerror or err}), expected a writable directory",
+                                 str(log_dir)) from err
         return candidate
     raise RunFolderError(f"found 999 folders named {base}*, expected a free name", str(log_dir))
 

@@ -39,6 +39,7 @@ from harness.paths import LOG_DIR
 from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.recording import load_run
+from harness.recording.runfolder import check_log_dir
 from harness.rig.truth import truth_metadata, truth_summary
 from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, run_session
@@ -299,6 +300,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         metadata={"record": motion_facts(motion), **truth_metadata(differences)},
         notes=(truth_summary(differences),) if differences else (),
     )
+    check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:
         session = run_session(
             profile, settings, on_start=coordinator.table.start,

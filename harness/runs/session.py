@@ -30,6 +30,7 @@ from harness.model.warmup import warm_up
 from harness.profile import Profile
 from harness.recording import RunFolder
 from harness.recording.layout import Outcome, RunKind
+from harness.recording.runfolder import check_log_dir
 from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
@@ -209,6 +210,7 @@ def run_session(
     supervisor = Supervisor(profile.safety, period_s=1.0 / profile.control.rate_hz)
     if table_link is not None:
         on_start, stop_table = table_link.start, table_link.stop
+    check_log_dir(settings.log_dir)  # before the bus opens: an unwritable log directory is bad input, nothing started
     link = open_harness(settings.can)
     folder = None
     try:

@@ -17,9 +17,9 @@ from typing import Any
 from harness.errors import ProfileError
 from harness.profile import Profile
 from harness.sweep.axes import Point, grid_points, sample_points
-from harness.sweep.records import StudyRecord, checked_records
+from harness.sweep.records import StudyRecord, checked_records, count_records
 from harness.sweep.resolve import BaseProfile
-from harness.sweep.study import Study
+from harness.sweep.study import MAX_CASES, Study
 
 #: Bump when what a key stands for changes (the results of old keys are then simulated again).
 KEY_VERSION = 1
@@ -113,6 +113,60 @@ def case_key(profile_sha: str, record: StudyRecord, pga_g: float | None, control
     return hashlib.sha256(json.dumps(inputs, sort_keys=True).encode()).hexdigest()[:20]
 
 
+@dataclass(frozen=True)
+class CaseCount:
+    """How many cases a study has, from its axes alone: each factor, and their product."""
+
+    records: int
+    pga_levels: int
+    controllers: int
+    grid_points: int
+    samples: int
+
+    @property
+    def total(self) -> int:
+        """Cases of the study: the product of the factors."""
+        return self.records * self.pga_levels * self.controllers * self.grid_points * self.samples
+
+    def describe(self) -> str:
+        """The factors in words, e.g. ``3 records x 4 PGA levels x 2 controllers x 1 grid point x 8 samples``."""
+        factors = ((self.records, "record"), (self.pga_levels, "PGA level"), (self.controllers, "controller"),
+                   (self.grid_points, "grid point"), (self.samples, "sample"))
+        return " x ".join(f"{count} {name}{'' if count == 1 else 's'}" for count, name in factors)
+
+
+def case_count(study: Study) -> CaseCount:
+    """Count the study's cases from its axes, without building them, and refuse more than :data:`MAX_CASES`.
+
+    Nothing is loaded or checked but the folders of the ``records`` axis (their record files are
+    counted); an axis left out counts one (the profile's record, PGA or controller).
+
+    Raises
+    ------
+    ProfileError
+        At ``axes``, with the count, its factors and the limit.
+    """
+    axes = study.axes
+    pga_levels = axes.pga_list()
+    grid = 1
+    for values in (*axes.set.values(), *axes.scale.values()):
+        grid *= len(values)
+    count = CaseCount(
+        records=1 if axes.records is None else count_records(axes.records, study.base_dir),
+        pga_levels=1 if pga_levels is None else len(pga_levels),
+        controllers=1 if axes.controllers is None else len(axes.controllers),
+        grid_points=grid,
+        samples=1 if study.monte_carlo is None else study.monte_carlo.samples,
+    )
+    if count.total > MAX_CASES:
+        raise ProfileError(
+            f"the study has {count.total} cases ({count.describe()}), expected at most {MAX_CASES} (MAX_CASES): "
+            "split it into studies of fewer levels, values or samples (a study extended later runs only its new cases)",
+            study.source_path, "axes",
+        )
+    return count
+
+
 def _controllers(study: Study, profile: Profile) -> tuple[str, ...]:
     names = study.axes.controllers or (profile.control.controller,)
     for i, name in enumerate(names):
@@ -143,8 +197,10 @@ def expand(study: Study) -> list[CaseSpec]:
     Raises
     ------
     ProfileError
-        For the study file's first refused value: its key, what was found and what was expected.
+        For more than :data:`MAX_CASES` cases (:func:`case_count`, before anything is built), and
+        for the study file's first refused value: its key, what was found and what was expected.
     """
+    case_count(study)
     base = base_of(study)
     try:
         profile = base.load()

@@ -56,7 +56,14 @@ class Outcome:
     interrupted: bool = False
 
 
-def _refuse_other_study(folder: Path, study: Study) -> None:
+def refuse_other_study(folder: Path, study: Study) -> None:
+    """Refuse a results folder that holds another study's results (its saved study file names another study).
+
+    Raises
+    ------
+    ProfileError
+        Naming both studies.
+    """
     saved = folder / STUDY_COPY
     if not saved.is_file():
         return
@@ -84,7 +91,7 @@ def open_folder(folder: Path, study: Study) -> Iterator[ResultStore]:
         except BlockingIOError as err:
             raise ProfileError(f"another sweep is writing {folder}; expected one sweep per results folder",
                                study.source_path) from err
-        _refuse_other_study(folder, study)
+        refuse_other_study(folder, study)
         shutil.copyfile(study.source_path, folder / STUDY_COPY)
         yield ResultStore(folder)
 

@@ -92,6 +92,24 @@ def study_records(entries: tuple[str, ...], base_dir: Path, records_dir: Path | 
     return found
 
 
+def count_records(entries: tuple[str, ...], base_dir: Path) -> int:
+    """How many records :func:`study_records` gives for ``entries``, without reading any of them.
+
+    A name, a file or ``synthetic:SEED`` counts one; a folder counts its record files (by
+    suffix, as :func:`study_records` takes them). Whether each exists is checked when the
+    study is expanded; this count sizes the study before that (``harness sweep --plan``).
+    """
+    total = 0
+    for entry in entries:
+        path = Path(entry).expanduser()
+        path = path if path.is_absolute() else base_dir / path
+        if synthetic_seed(entry) is None and path.is_dir():
+            total += sum(1 for p in path.iterdir() if p.is_file() and p.suffix.lower() in RECORD_SUFFIXES)
+        else:
+            total += 1
+    return total
+
+
 def checked_records(
     entries: tuple[str, ...], base_dir: Path, records_dir: Path | None, source: str, key: str
 ) -> list[StudyRecord]:

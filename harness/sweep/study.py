@@ -48,14 +48,22 @@ from harness.input_limits import (
 )
 from harness.schema import build, internal, quantity
 from harness.sweep.distributions import Distribution
-from harness.yamlload import DuplicateKeyError, load_unique
+from harness.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
 
-#: Largest study file read (bytes): a study is a page of YAML.
-MAX_STUDY_BYTES = 1_000_000
+#: Largest study file read (bytes): a study is a page of YAML; the limit of every YAML text (harness/yamlload.py).
+MAX_STUDY_BYTES = MAX_YAML_CHARS
 #: Most Monte-Carlo samples per grid point.
 MAX_SAMPLES = 1_000_000
 #: Most PGA levels of an ``pga_levels`` range.
 MAX_LEVELS = 1000
+#: Most cases of a study: records x PGA levels x controllers x grid points x samples. Each axis is
+#: capped on its own above, but their product was not, and a study of 10^7 cases held the
+#: command for minutes while its cases filled 2.3 GB. Expanding a study builds every case, with
+#: its key, in the parent process before any runs (100,000 cases: 3.2 s and about 100 MB on the
+#: 2-vCPU VM), and its results are one table. At the 7 cases/s a worker reaches (benchmarks/README.md)
+#: 100,000 cases are 4 hours on 2 workers and minutes on a cluster; a larger campaign is several
+#: studies, and a study extended later runs only its new cases.
+MAX_CASES = 100_000
 
 
 @dataclass(frozen=True)
@@ -207,7 +215,9 @@ def read_study_data(path: Path) -> dict:
     if not path.is_file():
         raise ProfileError("study file not found; expected an existing YAML file (see profiles/studies/)", source)
     if path.stat().st_size > MAX_STUDY_BYTES:
-        raise ProfileError(f"file is {path.stat().st_size} bytes; expected a study under {MAX_STUDY_BYTES} bytes", source)
+        raise ProfileError(
+            f"file is {path.stat().st_size} bytes; expected a study of at most {MAX_STUDY_BYTES} bytes (MAX_YAML_CHARS)", source
+        )
     try:
         data = load_unique(path.read_bytes().decode("utf-8"))
     except UnicodeDecodeError as err:

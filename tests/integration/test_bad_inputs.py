@@ -4,6 +4,12 @@ The profiles come from tests/unit/test_profile.py (each kind of bad profile); th
 are malformed accelerograms written here. Each goes through ``harness simulate`` (and the
 profiles also through ``harness dry-run``) in-process: an exception escaping ``main``
 would fail the test, so status 2 proves the error was handled and reported.
+
+:data:`BAD_ARGUMENTS` is the bad-input sweep of both safety reviews as one table: every
+option, value, path, key or file that was refused badly (a traceback, a silent acceptance,
+an unclear message) and is now refused well. Each row runs through ``main`` in-process
+and must exit 2, print no traceback, name the offending option or key with what was
+expected, and leave no run folder (nor sweep results) behind.
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ import pytest
 
 from harness import exit_codes
 from harness.cli import main
+from tests.conftest import PROFILES
 from tests.unit.test_profile import BAD_PROFILES
 
 GOOD_HEADER = "t_s,accel_g\n"
@@ -74,6 +81,11 @@ def test_bad_input_file_gives_a_clear_error_and_exit_2(tmp_path, capsys):
 
 
 # --- every bad option, value, path or key: exit 2, a message naming it and what was expected -------------
+
+#: The billion laughs: nine anchors, each nine aliases of the one before (9^9 strings once expanded), in 300 bytes.
+ALIAS_BOMB = "l0: &l0 [" + ", ".join(["lol"] * 9) + "]\n" + "".join(
+    f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 9) + "]\n" for i in range(1, 9)
+)
 
 RATE_RANGE = "expected a number of Hz in (0, 5000]"
 DURATION_RANGE = "expected a number of s in (0, 600]"
@@ -158,7 +170,61 @@ BAD_ARGUMENTS = {
         ["dry-run", "--set", "safety.force.max_force_N=40000", "--allow-weaker-safety"],
         ["safety.force.max_force_N", "found 40000 N", "expected at most 30000 N", "ACTUATOR_CMD"],
     ),
+    # --- second review (issue 19): a traceback (exit 1) ---
+    **{
+        f"log_dir_{label}_{command.replace('-', '_')}": (
+            [command, "--log-dir", path, *(["--yes"] if command == "run" else [])], ["--log-dir", *expected],
+        )
+        for command in ("dry-run", "run")
+        for label, path, expected in (
+            ("proc_self_x", "/proc/self/x", ["/proc/self/x: cannot create a folder there", "expected a writable directory"]),
+            ("proc_1", "/proc/1", ["/proc/1: cannot create a folder there", "expected a writable directory"]),
+            ("sys_kernel", "/sys/kernel", ["/sys/kernel: cannot create a folder there", "expected a writable directory"]),
+            ("below_a_file", "{tmp}/file.txt/logs", ["file.txt/logs is below", "which is a file, expected a directory"]),
+        )
+    },
+    "deep_yaml_profile": (["simulate", "{tmp}/deep.yaml"], ["deep.yaml", "invalid YAML", "nested deeper than 32 levels",
+                                                           "MAX_DEPTH"]),
+    "deep_yaml_profile_dry_run": (["dry-run", "{tmp}/deep.yaml"], ["deep.yaml", "MAX_DEPTH"]),
+    "deep_yaml_set": (["dry-run", "--set", "name=" + "[" * 500 + "]" * 500], ["--set", "not valid YAML", "MAX_DEPTH"]),
+    "deep_yaml_study": (["sweep", "{tmp}/deep_study.yaml"], ["deep_study.yaml", "invalid YAML", "MAX_DEPTH"]),
+    # --- second review: refused only after 66 s and 3.2 GB ---
+    "alias_bomb_in_a_string_field": (["simulate", "{tmp}/bomb.yaml"], ["bomb.yaml", "more than 100000 values", "MAX_VALUES"]),
+    "alias_bomb_dry_run": (["dry-run", "{tmp}/bomb.yaml"], ["bomb.yaml", "MAX_VALUES"]),
+    "alias_bomb_set": (["simulate", "--set", "description=" + ALIAS_BOMB], ["--set", "not valid YAML", "MAX_VALUES"]),
+    "alias_bomb_study": (["sweep", "{tmp}/bomb_study.yaml"], ["bomb_study.yaml", "MAX_VALUES"]),
+    "recursive_alias": (["simulate", "{tmp}/recursive.yaml"], ["recursive.yaml", "recursive anchor"]),
+    "set_value_of_a_megabyte": (["dry-run", "--set", "name=" + "x" * 1_000_001], ["--set", "MAX_YAML_CHARS", "'name=xxx"]),
+    # --- second review: 120 s of silence and 2.3 GB ---
+    "sweep_plan_of_ten_million_cases": (
+        ["sweep", "{tmp}/huge_study.yaml", "--plan"],
+        ["huge_study.yaml", "axes", "10000000 cases", "10 records x 1000 PGA levels", "expected at most 100000 (MAX_CASES)"],
+    ),
+    "sweep_of_ten_million_cases": (["sweep", "{tmp}/huge_study.yaml"], ["huge_study.yaml", "axes", "(MAX_CASES)"]),
+    # --- second review: unclear messages, and a run folder written ---
+    "lockstep_rate_0_001": (
+        ["dry-run", "--lockstep", "--rate", "0.001"],
+        ["--rate", "found 0.001 Hz", "expected at least 100 Hz", "safety.run.max_stall_s", "rig.drive.watchdog_timeout_s"],
+    ),
+    "realtime_rate_10": (["dry-run", "--rate", "10"], ["--rate", "found 10 Hz", "expected at least 100 Hz",
+                                                       "rig.drive.watchdog_timeout_s (50 ms"]),
+    "run_rate_10": (["run", "--rate", "10", "--yes"], ["--rate", "found 10 Hz", "expected at least 100 Hz"]),
+    "rate_profile_key_below_the_bound": (
+        ["dry-run", "--set", "loop.rate_hz=50", "--set", "control.rate_hz=50", "--set", "can.command_rate_hz=50"],
+        ["loop.rate_hz", "found 50 Hz", "expected at least 100 Hz"],
+    ),
+    "dry_run_rate_of_no_whole_substeps": (["dry-run", "--rate", "300"], ["--rate", "found 300 Hz", "rig.physics_substep_s",
+                                                                         "333.333 Hz or 285.714 Hz"]),
+    "duration_1e_9": (["dry-run", "--duration", "1e-9"], ["--duration", "found 1e-09 s", "expected at least 0.02 s"]),
+    "simulate_duration_1e_9": (["simulate", "--duration", "1e-9"], ["--duration", "found 1e-09 s", "expected at least 0.02 s"]),
+    "run_duration_1e_9": (["run", "--duration", "1e-9", "--yes"], ["--duration", "found 1e-09 s"]),
+    "duration_below_ten_record_samples": (
+        ["simulate", "--duration", "0.03"], ["--duration", "0.03 s", "expected at least 0.05 s", "10 samples of the record"],
+    ),
 }
+
+#: Paths of the table that exist on Linux only.
+KERNEL_PATHS = ("/proc/", "/sys/")
 
 
 def _run_folder(parent: Path, name: str, rows: int = 40) -> Path:
@@ -189,17 +255,34 @@ def inputs(tmp_path_factory) -> Path:
     signals = _run_folder(tmp, "truncated_signals") / "signals.csv"
     lines = signals.read_text().splitlines(keepends=True)
     signals.write_text("".join(lines[:21]) + lines[21][:10])  # header, 20 rows and a torn one: half the file
+    profile = PROFILES / "nceer_4dof.yaml"
+    (tmp / "deep.yaml").write_text(f"extends: {profile}\nname: " + "[" * 500 + "]" * 500 + "\n")
+    (tmp / "bomb.yaml").write_text(f"extends: {profile}\n" + ALIAS_BOMB + "name: *l8\n")  # a string field
+    (tmp / "recursive.yaml").write_text(f"extends: {profile}\ndescription: &d [1, *d]\n")
+    study = f"profile: {profile}\noptions: {{duration_s: 1}}\n"
+    (tmp / "deep_study.yaml").write_text(study + "name: " + "[" * 500 + "]" * 500 + "\n")
+    (tmp / "bomb_study.yaml").write_text(study + ALIAS_BOMB + "name: *l8\n")
+    records = ", ".join(f'"synthetic:{seed}"' for seed in range(1, 11))
+    (tmp / "huge_study.yaml").write_text(
+        study + f"name: huge\naxes:\n  records: [{records}]\n  pga_levels: {{start_g: 0.1, stop_g: 0.4, count: 1000}}\n"
+        "monte_carlo:\n  samples: 1000\n  seed: 1\n  set: {bearing.mu_max: {kind: uniform, low: 0.05, high: 0.12}}\n"
+    )
     return tmp
+
 
 
 @pytest.mark.parametrize("case", sorted(BAD_ARGUMENTS))
 def test_bad_argument_gives_exit_2_and_names_what_was_expected(inputs, capsys, case):
     argv, expected = BAD_ARGUMENTS[case]
+    if any(arg.startswith(KERNEL_PATHS) for arg in argv) and not Path("/proc/self").is_dir():
+        pytest.skip("needs Linux's /proc and /sys")
     argv = [arg.replace("{tmp}", str(inputs)) for arg in argv]
     if argv[0] in ("simulate", "dry-run", "rig", "run") and "--duration" not in argv and case != "too_long_record":
         argv += ["--duration", "1"]
     if argv[0] in ("dry-run", "run") and "--log-dir" not in argv:
         argv += ["--log-dir", str(inputs / "logs")]
+    if argv[0] == "sweep":
+        argv += ["--out", str(inputs / "sweep_results"), "--quiet"]
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)  # a numpy overflow warning would leak to the terminal
         status = main(argv)
@@ -210,7 +293,10 @@ def test_bad_argument_gives_exit_2_and_names_what_was_expected(inputs, capsys, c
         assert text in message, f"{text!r} not in {message!r}"
     assert "Traceback" not in out + err
     assert all(ch.isprintable() or ch in "\n\t" for ch in err), "raw bytes echoed to the terminal"
+    assert len(err) < 4000, "the message quotes too much of what it refused"
     assert not (inputs / "logs").exists() or not any((inputs / "logs").iterdir()), "a run folder was made"
+    assert not (inputs / "sweep_results").exists(), "a sweep results folder was made"
+    assert (inputs / "file.txt").is_file()
 
 
 def test_the_old_misleading_messages_are_gone(inputs, capsys):

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from harness.errors import ProfileError
-from harness.sweep.cases import expand
+from harness.sweep import cases as study_cases
+from harness.sweep.cases import case_count, expand
 from harness.sweep.distributions import LogNormal, Normal, Uniform, draw, unit_samples
-from harness.sweep.study import load_study
+from harness.sweep.study import MAX_CASES, load_study
 from tests.conftest import PROFILES
 
 BASE = f"""\
@@ -56,6 +57,39 @@ def test_a_study_expands_into_the_product_of_its_axes(tmp_path):
     assert inputs["control.design_stiffness_scale"] == 0.7 and inputs["sample"] == 0
     assert 0.05 <= inputs["bearing.mu_max"] <= 0.12 and 0.7 <= inputs["scale:structure.story_stiffness_N_per_m"] <= 1.3
     assert dict(first.options) == {"duration_s": 2.0}
+
+
+def test_the_count_from_the_axes_is_the_number_of_cases_expanded(tmp_path):
+    folder = tmp_path / "records"
+    folder.mkdir()
+    for k, name in enumerate(("a.csv", "b.AT2", "notes.md")):  # two record files; the notes are not a record
+        (folder / name).write_text("t_s,accel_g\n" + "".join(f"{i * 0.01:.2f},{0.01 * k * (-1) ** i}\n" for i in range(50)))
+    text = BASE.replace('records: ["synthetic:1", "synthetic:2"]', 'records: ["synthetic:1", records]')
+    text = text.replace("set: {control.design_stiffness_scale: [0.7, 1.3]}",
+                        "set: {control.design_stiffness_scale: [0.7, 1.3]}\n  scale: {bearing.mu_delta: [0.9, 1.0, 1.1]}")
+    study = load_study(_study_file(tmp_path, text))
+    count = case_count(study)
+    assert (count.records, count.pga_levels, count.controllers, count.grid_points, count.samples) == (3, 2, 2, 6, 3)
+    assert count.total == len(expand(study)) == 216
+    assert count.describe() == "3 records x 2 PGA levels x 2 controllers x 6 grid points x 3 samples"
+
+
+def test_a_study_beyond_the_case_limit_is_refused_from_its_axes_before_any_case_is_built(tmp_path, monkeypatch):
+    """--plan on 10^7 cases printed nothing for 120 s and grew past 2.3 GB: the axes were capped one by one only."""
+    def never(*args):
+        raise AssertionError("a case was built before the count was checked")
+
+    for name in ("grid_points", "sample_points", "_records", "case_key"):
+        monkeypatch.setattr(study_cases, name, never)
+    huge = BASE.replace("pga_g: [0.1, 0.2]", "pga_levels: {start_g: 0.1, stop_g: 1.0, count: 1000}")
+    huge = huge.replace("samples: 3", "samples: 5000")  # 2 x 1000 x 2 x 2 x 5000 = 4e7 cases
+    with pytest.raises(ProfileError) as caught:
+        expand(load_study(_study_file(tmp_path, huge)))
+    assert caught.value.key_path == "axes"
+    assert (f"the study has 40000000 cases (2 records x 1000 PGA levels x 2 controllers x 2 grid points x 5000 samples), "
+            f"expected at most {MAX_CASES} (MAX_CASES)") in caught.value.detail
+    at_limit = huge.replace("samples: 5000", f"samples: {MAX_CASES // 8000}")  # 8000 x 12 = 96,000
+    assert case_count(load_study(_study_file(tmp_path, at_limit))).total <= MAX_CASES
 
 
 def test_keys_depend_on_the_inputs_only(tmp_path):
