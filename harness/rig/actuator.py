@@ -37,6 +37,16 @@ if TYPE_CHECKING:
     from harness.rig.table import TablePlant
 
 
+def slew_and_clamp(previous: float, target: float, max_step: float, limit: float) -> float:
+    """``target`` moved at most ``max_step`` from ``previous``, then held inside ``[-limit, limit]``."""
+    step = target - previous
+    if step > max_step:
+        target = previous + max_step
+    elif step < -max_step:
+        target = previous - max_step
+    return limit if target > limit else -limit if target < -limit else target
+
+
 class DelayLine:
     """A transport delay of whole sub-steps.
 
@@ -104,13 +114,7 @@ class ServoActuator:
         return held_N
 
     def _limit(self, previous: float, target: float) -> float:
-        step = target - previous
-        if step > self._max_step_N:
-            target = previous + self._max_step_N
-        elif step < -self._max_step_N:
-            target = previous - self._max_step_N
-        limit = self.config.force_limit_N
-        return limit if target > limit else -limit if target < -limit else target
+        return slew_and_clamp(previous, target, self._max_step_N, self.config.force_limit_N)
 
     def substep(self, command_N: float, enabled: bool) -> float:
         """Advance one sub-step; return the force held on the plant over it (N).
@@ -192,14 +196,8 @@ class HydraulicActuator:
         The command is delayed by ``delay_s``, rate limited and clamped to ``force_limit_N``
         (the servo controller's command range); ``enabled`` sets the drive's enable flag.
         """
-        command = self._delay.push(command_N)
-        step = command - self.command_N
-        if step > self._max_step_N:
-            command = self.command_N + self._max_step_N
-        elif step < -self._max_step_N:
-            command = self.command_N - self._max_step_N
-        limit = self.config.force_limit_N
-        self.command_N = min(max(command, -limit), limit) if enabled else 0.0
+        command = slew_and_clamp(self.command_N, self._delay.push(command_N), self._max_step_N, self.config.force_limit_N)
+        self.command_N = command if enabled else 0.0
         self.table.rig_params[hy.ENABLED] = 1.0 if enabled else 0.0
         return self.force_N
 

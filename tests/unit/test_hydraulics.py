@@ -201,3 +201,36 @@ def test_a_motion_source_table_follows_its_drive_exactly() -> None:
     plant.reset()
     plant.advance(0.0, 0.5, 0.0)
     assert plant.table_now(0.5) == pytest.approx(drive.state(0.5))
+
+
+def test_the_rigs_actuator_delays_limits_and_enables_the_cylinder_of_the_live_plant() -> None:
+    from harness.motions.config import load_motion
+    from harness.rig.actuator import HydraulicActuator, make_actuator
+    from harness.rig.table import TablePlant
+
+    rig = dataclasses.replace(PROFILE.rig, base_pinned=True)  # blocked: the force reaches the command
+    motion = load_motion(PROFILE.record, base_dir=PROFILE.base_dir, name="synthetic", duration_s=2.0)
+    table = TablePlant(PROFILE.structure, PROFILE.bearing, motion, 1e-6, rig)
+    actuator = make_actuator(rig, rig.physics_substep_s, table)
+    assert isinstance(actuator, HydraulicActuator)
+    h = rig.physics_substep_s
+
+    def run(command_N: float, enabled: bool, substeps: int) -> float:
+        for _ in range(substeps):
+            actuator.substep(command_N, enabled)
+            table.advance(table.time_s, h, actuator.plant_input(0.0))
+        return actuator.force_N
+
+    assert run(50_000.0, False, 200) == 0.0  # disabled: no force, whatever the command
+    assert actuator.command_N == 0.0
+    actuator.reset()
+    run(50_000.0, True, actuator.delay_substeps)
+    assert actuator.delay_substeps == 2 and actuator.command_N == 0.0  # 1 ms of transport delay: 2 sub-steps
+    run(50_000.0, True, 1)
+    assert actuator.command_N == rig.actuator.force_rate_limit_N_per_s * h  # then the command slews at the rate limit
+    force = run(50_000.0, True, 400)
+    assert actuator.command_N == rig.actuator.force_limit_N  # the command range, reached at the rate limit
+    assert 0.9 * rig.actuator.force_limit_N < force <= rig.actuator.force_limit_N * 1.001  # on the held (pre-start) plant
+    table.start()
+    assert actuator.force_N == pytest.approx(force)  # the state carried across; the shared enable flag still set
+    assert table.rig_params[hy.ENABLED] == 1.0
