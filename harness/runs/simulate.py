@@ -8,11 +8,11 @@ sampling settings, and the results in the JSON layout of the issue tracker (SI).
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from harness import strict_json
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import (
     build_controller_for_rig,
@@ -84,7 +84,7 @@ class StudyResult:
 
     def write_json(self, path: str | Path) -> None:
         """Write :meth:`to_json` to ``path``."""
-        Path(path).write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        Path(path).write_text(strict_json.dumps(self.to_json(), indent=2) + "\n")
 
 
 def motion_facts(motion: GroundMotion) -> dict:
