@@ -113,6 +113,8 @@ def _print_study(console: Console, result: Any) -> None:
     )
     for note in getattr(motion, "notes", ()):
         console.print(f"  note: {note}")
+    for warning in motion.warnings:
+        console.print(f"  [bold yellow]warning:[/] {escape(warning)}", highlight=False)
     settings = result.settings
     title = (
         f"controller {result.controller_name} at {settings.rate_hz:g} Hz, friction from the "

@@ -297,7 +297,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
         show_console=options.show_console,
         metadata={"record": motion_facts(motion), **truth_metadata(differences)},
-        notes=(truth_summary(differences),) if differences else (),
+        notes=((truth_summary(differences),) if differences else ()) + motion.warnings,
     )
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:
         session = run_session(

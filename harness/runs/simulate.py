@@ -88,7 +88,7 @@ class StudyResult:
 
 
 def motion_facts(motion: GroundMotion) -> dict:
-    """Name, PGA (g), PGV (m/s), PGD (m), time scale and duration (s) of a processed motion."""
+    """Name, PGA (g), PGV (m/s), PGD (m), time scale, duration (s) and the share of Arias intensity the cut left out."""
     return {
         "name": motion.name,
         "pga_g": motion.pga_g,
@@ -96,6 +96,7 @@ def motion_facts(motion: GroundMotion) -> dict:
         "pgd_m": motion.pgd_m,
         "time_scale": motion.time_scale,
         "duration_s": motion.duration_s,
+        "arias_left_out": motion.arias_left_out,
     }
 
 
