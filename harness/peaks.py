@@ -194,13 +194,39 @@ def run_peaks(run: RunData) -> Peaks:
     return peak_responses(run.signals, weight if isinstance(weight, (int, float)) else None, passive=run.is_passive)
 
 
-def reduction_pct(passive: float | None, hybrid: float | None) -> float | None:
-    """Percent reduction ``100 (passive - hybrid) / passive`` (SPEC 5).
+#: A reference (passive) peak at or below this, in its SI unit (m, m/s^2, % of the weight), is
+#: numerically zero: 1 um and 1 um/s^2 are below the resolution of a rig's displacement
+#: transducers and accelerometers, and far below the peaks any record gives a passive case;
+#: a run that ended before its record started leaves passive peaks like 1e-14 m.
+REFERENCE_FLOOR_SI = 1e-6
+#: A reference peak smaller than this share of the compared peak is not at the response's
+#: scale: the tables show peaks to about three significant figures, so such a reference has
+#: no significant digit at the compared value's scale, and its "reduction" (below -99 900 %)
+#: would only measure the reference's noise.
+REFERENCE_RATIO_FLOOR = 1e-3
 
-    Returns None if either value is absent or not finite, or ``passive`` is 0.
+
+def comparable_reference(passive: float, hybrid: float) -> bool:
+    """Whether a percent reduction of ``hybrid`` against the reference ``passive`` means something.
+
+    Both must be finite, the reference above :data:`REFERENCE_FLOOR_SI` (numerically not zero)
+    and at least :data:`REFERENCE_RATIO_FLOOR` times ``|hybrid|`` (at the response's scale).
     """
-    if passive is None or hybrid is None or not math.isfinite(passive) or not math.isfinite(hybrid):
-        return None
-    if passive == 0.0:
+    if not math.isfinite(passive) or not math.isfinite(hybrid):
+        return False
+    reference = abs(passive)
+    return reference > REFERENCE_FLOOR_SI and reference >= REFERENCE_RATIO_FLOOR * abs(hybrid)
+
+
+def reduction_pct(passive: float | None, hybrid: float | None) -> float | None:
+    """Percent reduction ``100 (passive - hybrid) / passive`` (SPEC 5), or None where it means nothing.
+
+    The one place that decides whether a reduction is shown: every table, report, CSV and
+    sweep column takes its reductions from here. None (shown as
+    :data:`harness.report.peak_table.NO_REDUCTION`) unless :func:`comparable_reference`: a
+    value absent or not finite, a reference that is numerically zero or far below the
+    response's scale (a run that tripped before its record started).
+    """
+    if passive is None or hybrid is None or not comparable_reference(passive, hybrid):
         return None
     return 100.0 * (passive - hybrid) / passive

@@ -98,6 +98,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
         f"[bold]{profile.name}[/] dry run, record [bold]{motion.name}[/]: PGA {motion.pga_g:.3f} g, "
         f"PGD {motion.pgd_m * 1e3:.1f} mm, time scale {motion.time_scale:g}, {motion.duration_s:.1f} s"
     )
+    for warning in motion.warnings:
+        console.print(f"  [bold yellow]warning:[/] {escape(warning)}", highlight=False)
     title = "peak responses: simulated passive reference and the dry run"
     if result.span_s is not None:
         title += f", over the {result.span_s:.2f} s of record that ran before the run ended ({session.outcome})"

@@ -195,6 +195,8 @@ def show_command(args: argparse.Namespace, console: Console, profile: Any) -> in
     console.print(_spectrum_table(raw, motion))
     for note in motion.notes:
         console.print(f"  note: {escape(note)}")
+    for warning in motion.warnings:
+        console.print(f"  [bold yellow]warning:[/] {escape(warning)}", highlight=False)
     fits = _fit(console, motion, resolved)
     if args.plot is not None:
         from harness.recording.metadata import safe_name

@@ -6,13 +6,12 @@ Comma-separated lists of records and controllers make a batch: every record with
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
 
-from harness import exit_codes
+from harness import exit_codes, strict_json
 from harness.commands.options import (
     DELAY,
     RATE,
@@ -116,6 +115,8 @@ def _print_study(console: Console, result: Any) -> None:
     )
     for note in getattr(motion, "notes", ()):
         console.print(f"  note: {note}")
+    for warning in motion.warnings:
+        console.print(f"  [bold yellow]warning:[/] {escape(warning)}", highlight=False)
     settings = result.settings
     title = (
         f"controller {result.controller_name} at {settings.rate_hz:g} Hz, friction from the "
@@ -187,8 +188,7 @@ def run_batch_command(args: argparse.Namespace, console: Console, profile: Any, 
         console.print(table.to_text(console.width), highlight=False, markup=False, soft_wrap=True)
     if args.json:
         with open(args.json, "w", encoding="utf-8") as handle:
-            json.dump({"runs": [study.to_json() for study in batch.studies]}, handle, indent=2)
-            handle.write("\n")
+            handle.write(strict_json.dumps({"runs": [study.to_json() for study in batch.studies]}, indent=2) + "\n")
         console.print(f"wrote {args.json}")
     if args.out:
         console.print(f"wrote {len(batch.folders)} case sets and the summary tables (summary_peaks.csv, "

@@ -318,5 +318,5 @@ def _rich(table: Table) -> RichTable:
         shown.add_column(name.replace(" ", "\n").replace("_", " "), justify="left" if left else "right",
                          min_width=12 if left else None)
     for row in rows:
-        shown.add_row(*(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row))
+        shown.add_row(*table.cells(row))
     return shown

@@ -22,6 +22,12 @@ Three pieces, used in this order by :func:`harness.motions.processing.process_re
     the correction touches only frequencies below the corner. The corrected
     acceleration is then integrated again with the rule, so the triple satisfies
     it to round-off, and (the rule being linear) ends at rest to round-off.
+
+A record cut short (``duration_s`` shorter than the record) is corrected whole with the
+three pieces above, so the correction does not depend on where the cut falls, and then
+:func:`stop_at_rest` ends the kept part: a cosine taper of the acceleration over its last
+samples, and two half-sine bumps on that same stretch that bring the table to rest
+(``v = x = 0`` at the end, exactly). Before the stretch the motion is the whole record's.
 """
 
 from __future__ import annotations
@@ -128,3 +134,49 @@ def _constrained_least_squares(
     rhs = np.concatenate([-(bump_x @ displacement) / scale**2, [-displacement[-1] / scale, -velocity_end / scale]])
     solution = np.linalg.lstsq(kkt, rhs, rcond=None)[0]
     return solution[:count]
+
+
+#: Half-sine bumps :func:`stop_at_rest` adds over the stop: as many as the conditions it meets (v = x = 0).
+STOP_BUMPS = 2
+
+
+def stop_at_rest(accel_m_s2: np.ndarray, dt_s: float, n_stop: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """End a cut of a corrected record at rest over its last ``n_stop`` samples.
+
+    The acceleration is multiplied by a cosine taper from 1 to 0 over the last ``n_stop``
+    samples; then the two bumps ``b_j sin(j pi tau / L)``, ``j = 1, 2`` (``tau`` from the
+    start of the stop, ``L`` its length; both 0 at its ends), are added so that the velocity
+    and the displacement integrated from rest end at 0. The motion before the stop is not
+    touched, and the triple satisfies the rule to round-off.
+
+    Parameters
+    ----------
+    accel_m_s2 : numpy.ndarray
+        The kept part of a corrected record (m/s^2), integrated from rest.
+    dt_s : float
+        Sample step (s).
+    n_stop : int
+        Samples of the stop (at least 3, at most the record's).
+
+    Returns
+    -------
+    accel_m_s2, velocity_m_s, displacement_m : numpy.ndarray
+        The triple; it ends with ``a = v = x = 0`` (``v`` and ``x`` to round-off).
+    """
+    n = accel_m_s2.size
+    start = n - n_stop
+    phase = np.pi * np.arange(n_stop) / (n_stop - 1)
+    accel = np.array(accel_m_s2, dtype=float)
+    accel[start:] *= 0.5 * (1.0 + np.cos(phase))
+    velocity, displacement = integrate_from_rest(accel, dt_s)
+    bumps = np.zeros((STOP_BUMPS, n))
+    ends = np.empty((2, STOP_BUMPS))
+    for j in range(STOP_BUMPS):
+        bumps[j, start:] = np.sin((j + 1) * phase)
+        bumps[j, start], bumps[j, -1] = 0.0, 0.0
+        bump_v, bump_x = integrate_from_rest(bumps[j, start:], dt_s)
+        ends[:, j] = bump_x[-1], bump_v[-1]
+    coefficients = np.linalg.solve(ends, -np.array([displacement[-1], velocity[-1]]))
+    corrected = accel + coefficients @ bumps
+    new_velocity, new_displacement = integrate_from_rest(corrected, dt_s)
+    return corrected, new_velocity, new_displacement

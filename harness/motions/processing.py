@@ -6,7 +6,11 @@ Order of operations (SPEC section 4), in :func:`process_record`:
    ``F`` (``dt -> dt/F``); acceleration values are unchanged, so velocity scales as
    ``1/F`` and displacement as ``1/F^2``.
 2. **Cut** to ``duration_s`` (in the compressed time). A record shorter than that
-   is zero-padded and a note says so.
+   is zero-padded and a note says so. A record longer than that is *not* cut yet: it is
+   scaled and baseline-corrected whole (steps 3-4), so the correction does not depend on
+   where the cut falls, and only then cut (step 4e). A cut that leaves out more than
+   :data:`ARIAS_WARNING_SHARE` of the record's Arias intensity gets a warning
+   (:attr:`GroundMotion.warnings`).
 3. **Scale** to the target PGA (or keep the record's own PGA when none is given).
 4. **Baseline correction** (:mod:`harness.motions.baseline`), so that the table
    starts and ends at rest near zero displacement instead of drifting by tens of
@@ -26,6 +30,11 @@ Order of operations (SPEC section 4), in :func:`process_record`:
       low-order fit from the displacement": the bumps vanish at both ends, so the
       acceleration still starts and ends at 0, and the rule is linear, so the sum
       is still an exact triple. The notes report the end offsets removed.
+   e. a record cut short keeps its first ``duration_s`` of the corrected motion and
+      comes to rest over the last :data:`CUT_STOP_S` of them
+      (:func:`harness.motions.baseline.stop_at_rest`: a cosine taper of the
+      acceleration and two half-sine bumps that bring velocity and displacement to 0).
+      Before the stop the table moves exactly as in the whole record.
 
 5. **Re-scale** all three by one factor so the PGA equals the target exactly
    (one factor for all three keeps them consistent).
@@ -45,7 +54,7 @@ from numpy.typing import ArrayLike
 
 from harness.errors import RecordError
 from harness.motions.accel_units import G_M_S2
-from harness.motions.baseline import bump_count, fit_rest, highpass, taper_window
+from harness.motions.baseline import bump_count, fit_rest, highpass, stop_at_rest, taper_window
 from harness.motions.checks import MIN_SAMPLES
 from harness.motions.integration import interpolate, interpolate_scalar
 from harness.motions.loaders import RawRecord, SampledAcceleration
@@ -54,6 +63,13 @@ from harness.motions.loaders import RawRecord, SampledAcceleration
 DEFAULT_BASELINE_CORNER_HZ = 0.1
 #: Default length of each cosine ramp, as a fraction of the processed record.
 DEFAULT_TAPER_FRACTION = 0.01
+#: Length of the stop at the end of a record cut short (s, processed time; at most half the cut):
+#: a cosine taper of the acceleration and two half-sine bumps of 0.5 and 1 Hz that bring the
+#: table to rest. On El Centro, Hachinohe and Pacoima (time scale 2, 0.34 g), cut anywhere
+#: after 4 s, the stop adds at most 0.2 % to the PGD of the kept motion and 0.1 % to its PGA.
+CUT_STOP_S = 1.0
+#: A cut that leaves out more than this share of the record's Arias intensity is warned about.
+ARIAS_WARNING_SHARE = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,6 +97,9 @@ class GroundMotion(SampledAcceleration):
         Length of each cosine ramp (s).
     source : str
         Where the raw record came from.
+    arias_left_out : float
+        Share of the record's Arias intensity (of its acceleration after time compression)
+        that the cut to ``duration_s`` left out, from 0 to 1; 0 when nothing was cut.
     """
 
     name: str
@@ -95,6 +114,7 @@ class GroundMotion(SampledAcceleration):
     baseline_corner_hz: float | None = None
     taper_s: float = 0.0
     source: str = ""
+    arias_left_out: float = 0.0
 
     def __post_init__(self) -> None:
         for field in ("t_s", "accel_m_s2", "velocity_m_s", "displacement_m"):
@@ -105,6 +125,14 @@ class GroundMotion(SampledAcceleration):
             array.flags.writeable = False
             object.__setattr__(self, field, array)
 
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What a user must know before running the motion: a cut that leaves out much of the record's shaking."""
+        if self.arias_left_out <= ARIAS_WARNING_SHARE:
+            return ()
+        return (f"the cut to {self.duration_s:g} s leaves out {100 * self.arias_left_out:.0f} % of the record's Arias "
+                f"intensity (more than {100 * ARIAS_WARNING_SHARE:g} %): the run misses that part of the shaking",)
 
     @property
     def pgv_m_s(self) -> float:
@@ -175,15 +203,24 @@ def process_record(
     dt = raw.dt_s / time_scale
     if time_scale != 1.0:
         notes.append(f"time compressed by {time_scale:g}: step {raw.dt_s:g} s -> {dt:g} s")
-    accel, n_content = _cut(np.array(raw.accel_m_s2, dtype=float), dt, duration_s, notes)
+    record = np.array(raw.accel_m_s2, dtype=float)
+    accel, n_content = _cut(record, dt, duration_s, notes)
     peak = float(np.max(np.abs(accel)))
     if peak == 0.0:
         raise RecordError(f"record {raw.name!r} holds only zeros in the selected {(accel.size - 1) * dt:g} s")
     target = pga_g * G_M_S2 if pga_g is not None else peak
     if pga_g is None:
         notes.append(f"PGA kept at the record's {peak / G_M_S2:.4g} g")
-    accel *= target / peak
+    kept = accel.size
+    cut = kept < record.size
+    if cut:  # correct the whole record, cut afterwards: the correction does not depend on where the cut falls
+        accel, n_content = record, record.size
+    accel = accel * (target / peak)
     accel, velocity, displacement, taper_s = _baseline(accel, n_content, dt, options, notes)
+    arias_left_out = 0.0
+    if cut:
+        accel, velocity, displacement = _stop(accel[:kept], dt, notes)
+        arias_left_out = _arias_left_out(record, kept, dt)
     remaining = float(np.max(np.abs(accel)))
     if remaining == 0.0:
         raise RecordError(f"record {raw.name!r}: no motion is left after the {taper_s:g} s tapers; lower taper_fraction")
@@ -201,6 +238,7 @@ def process_record(
         baseline_corner_hz=baseline_corner_hz,
         taper_s=taper_s,
         source=raw.source,
+        arias_left_out=arias_left_out,
     )
 
 
@@ -244,6 +282,21 @@ def _cut(accel: np.ndarray, dt: float, duration_s: float | None, notes: list[str
         return accel[:n].copy(), n
     notes.append(f"record is {(accel.size - 1) * dt:g} s long after compression; zero-padded to {(n - 1) * dt:g} s")
     return np.concatenate([accel, np.zeros(n - accel.size)]), accel.size
+
+
+def _stop(accel: np.ndarray, dt: float, notes: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Bring the kept part of a corrected record to rest over its last :data:`CUT_STOP_S` (at most half of it)."""
+    n_stop = max(3, min(int(round(CUT_STOP_S / dt)) + 1, (accel.size + 1) // 2))
+    notes.append(f"cut after the baseline correction of the whole record; brought to rest over the last "
+                 f"{(n_stop - 1) * dt:g} s (cosine taper and two half-sine corrections)")
+    return stop_at_rest(accel, dt, n_stop)
+
+
+def _arias_left_out(record: np.ndarray, kept: int, dt: float) -> float:
+    """Share of the Arias intensity of ``record`` (after compression, before any taper) after its first ``kept`` samples."""
+    squared = record**2
+    intensity = np.concatenate([[0.0], np.cumsum(0.5 * dt * (squared[:-1] + squared[1:]))])
+    return float(1.0 - intensity[kept - 1] / intensity[-1]) if intensity[-1] > 0.0 else 0.0
 
 
 def _baseline(

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import datetime as _dt
 import importlib.metadata
-import json
 import os
 import platform
 import re
@@ -23,6 +22,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from harness import strict_json
 from harness.recording.layout import RunFolderError
 
 #: Distributions whose versions every run records.
@@ -114,7 +114,8 @@ def write_json_atomic(path: Path, data: Mapping[str, Any]) -> None:
     path : Path
         Final file name.
     data : mapping
-        JSON-serialisable data; non-finite floats are written as ``NaN``/``Infinity``.
+        JSON-serialisable data (:func:`json_default` converts numpy values, paths and times);
+        a non-finite float is written ``null`` (:mod:`harness.strict_json`).
 
     Raises
     ------
@@ -122,7 +123,7 @@ def write_json_atomic(path: Path, data: Mapping[str, Any]) -> None:
         If the file cannot be written; ``path`` then keeps its previous content.
     """
     temporary = path.with_name(f".{path.name}.tmp")
-    text = json.dumps(data, indent=2, sort_keys=False, default=json_default)
+    text = strict_json.dumps(data, json_default, indent=2, sort_keys=False)
     try:
         with open(temporary, "w", encoding="utf-8") as handle:
             handle.write(text + "\n")

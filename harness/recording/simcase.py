@@ -11,13 +11,13 @@ including pandas and MATLAB users who open one CSV.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from harness import strict_json
 from harness.recording.layout import (
     EVENTS_FILE,
     FORMAT_NAME,
@@ -137,7 +137,7 @@ def _write_events(path: Path, events: Iterable[Mapping[str, Any]]) -> None:
                 "name": event.get("name", ""),
                 "detail": event.get("detail"),
             }
-            handle.write(json.dumps(plain_data(record), default=str) + "\n")
+            handle.write(strict_json.dumps(record, str) + "\n")
 
 
 def _case_metadata(

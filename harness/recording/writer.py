@@ -17,7 +17,6 @@ every row, frame and event the tick handed over that did not reach the files.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import queue
@@ -30,6 +29,7 @@ from typing import Any, TextIO
 import can
 import numpy as np
 
+from harness import strict_json
 from harness.recording.metadata import json_default
 from harness.recording.ring import FrameRing, RowRing
 
@@ -273,7 +273,7 @@ class RunWriter:
 
     def _write_event_line(self, t: float | None, wall: float, kind: str, name: str, detail: Any) -> None:
         record = {"t_s": _finite_or_none(t), "wall_time": wall, "kind": kind, "name": name, "detail": detail}
-        self._event_file.write(json.dumps(record, default=_event_default) + "\n")
+        self._event_file.write(strict_json.dumps(record, _event_default) + "\n")
 
     def _flush(self) -> None:
         """Flush every file, and fsync them every ``fsync_interval_s``; both release the interpreter lock."""

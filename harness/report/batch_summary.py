@@ -3,7 +3,8 @@
 Two :class:`~harness.report.peak_table.PeakTable`:
 
 - :func:`peaks_per_record`: per record, the passive peaks and each controller's (one column each);
-- :func:`reduction_summary`: per controller, the mean and the largest percent reduction
+- :func:`reduction_summary`: per controller, the mean, the smallest (the worst case: where a
+  response grew most, e.g. the sliding displacement) and the largest percent reduction
   ``(passive - hybrid) / passive`` over the records (SPEC 5), quantity by quantity.
 """
 
@@ -14,10 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.peaks import Peaks, reduction_pct
-from harness.report.peak_table import PeakRow, PeakTable
+from harness.peaks import Peaks
+from harness.report.peak_table import PERCENT_DIGITS, PeakRow, PeakTable
 from harness.report.quantities import REPORT_WORDING, Quantity, response_quantities
-from harness.report.tables import PERCENT_DIGITS
+
+#: The statistics over the records of each controller's reductions, in column order.
+STATISTICS = ("mean", "min", "max")
 
 
 @dataclass(frozen=True)
@@ -64,27 +67,35 @@ def peaks_per_record(cases: Sequence[BatchCase]) -> PeakTable:
 
 
 def _reductions(quantity: Quantity, cases: Sequence[BatchCase]) -> list[float]:
-    values = [reduction_pct(quantity.si_value(case.passive), quantity.si_value(case.controlled)) for case in cases]
+    """The comparable reductions of ``quantity`` over ``cases`` (:meth:`Quantity.reduction`)."""
+    values = [quantity.reduction(case.passive, case.controlled) for case in cases]
     return [value for value in values if value is not None]
 
 
+def _statistics(found: list[float]) -> list[float | None]:
+    """Mean, min (the worst case) and max of ``found``, in :data:`STATISTICS` order; None each when empty."""
+    if not found:
+        return [None] * len(STATISTICS)
+    return [float(np.mean(found)), float(np.min(found)), float(np.max(found))]
+
+
 def reduction_summary(cases: Sequence[BatchCase]) -> PeakTable:
-    """Per controller, the mean and the largest percent reduction over the records, quantity by quantity."""
+    """Per controller, the mean, the smallest (worst case) and the largest percent reduction over the records."""
     controllers = _controllers(cases)
     records = _records(cases)
     rows = []
     for quantity in _quantities(cases):
         cells: list[float | None] = []
         for controller in controllers:
-            found = _reductions(quantity, [case for case in cases if case.controller == controller])
-            usable = quantity.comparable and bool(found)
-            cells += [float(np.mean(found)) if usable else None, float(np.max(found)) if usable else None]
+            cells += _statistics(_reductions(quantity, [case for case in cases if case.controller == controller]))
         if any(cell is not None for cell in cells):
             rows.append(PeakRow(quantity.key, quantity.label, "%", PERCENT_DIGITS, tuple(cells)))
-    columns = tuple(f"{controller} {which}" for controller in controllers for which in ("mean", "max"))
+    columns = tuple(f"{controller} {which}" for controller in controllers for which in STATISTICS)
     title = f"Reduction (%) per controller over {len(records)} record{'s' if len(records) != 1 else ''}"
-    note = f"reduction = (passive - hybrid) / passive, per record ({', '.join(records)}); mean and largest over them."
-    return PeakTable(title, _headings(), columns, tuple(rows), (PERCENT_DIGITS,) * len(columns), note)
+    note = (f"reduction = (passive - hybrid) / passive, per record ({', '.join(records)}); mean, min (the worst "
+            "case; negative: the response grew) and max over them.")
+    return PeakTable(title, _headings(), columns, tuple(rows), (PERCENT_DIGITS,) * len(columns), note,
+                     reduction_columns=tuple(range(len(columns))))
 
 
 def batch_tables(cases: Sequence[BatchCase]) -> list[PeakTable]:

@@ -22,9 +22,9 @@ DPI = 100
 WIDTH_PX = 1200
 
 #: Colours per run in order; passive runs are drawn in greys so the controlled runs stand out.
-_COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
+RUN_COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 PASSIVE_COLOUR = "#7f7f7f"
-_PASSIVE_COLOURS = (PASSIVE_COLOUR, "#404040", "#b0b0b0", "#5f5f5f")
+PASSIVE_SHADES = (PASSIVE_COLOUR, "#404040", "#b0b0b0", "#5f5f5f")
 
 _STYLE: dict[str, Any] = {
     "font.size": 11,
@@ -85,9 +85,9 @@ def colours(runs: Sequence[RunData]) -> list[str]:
     controlled = passive = 0
     for run in runs:
         if run.is_passive:
-            result.append(_PASSIVE_COLOURS[passive % len(_PASSIVE_COLOURS)])
+            result.append(PASSIVE_SHADES[passive % len(PASSIVE_SHADES)])
             passive += 1
         else:
-            result.append(_COLOURS[controlled % len(_COLOURS)])
+            result.append(RUN_COLOURS[controlled % len(RUN_COLOURS)])
             controlled += 1
     return result

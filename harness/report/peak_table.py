@@ -5,13 +5,18 @@ cases) and derived columns (percent reduction, differences). Cells hold numbers 
 display units (mm, m/s^2, %), None where absent, so tests and other tools read the
 numbers, and each rendering formats them the same way: rich (the console), plain text,
 HTML and CSV. The tables themselves are built in :mod:`harness.report.tables`.
+
+A percent-reduction column (:attr:`PeakTable.reduction_columns`) shows :data:`NO_REDUCTION`
+where it has no value: :func:`harness.peaks.reduction_pct` found no comparable reference, or
+:func:`without_reductions` took them out (a run that did not play its record). The CSV
+leaves such a cell empty, as it does every absent value, so it stays a column of numbers.
 """
 
 from __future__ import annotations
 
 import csv
 import io
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from html import escape
 
 from rich import box
@@ -21,6 +26,15 @@ from harness.report.text_table import TextTable
 
 #: What an absent cell shows.
 ABSENT = "-"
+#: What a percent reduction shows where it means nothing (no comparable reference, a run that did not play its record).
+NO_REDUCTION = "\u2014"
+#: Decimals of a percent reduction or difference.
+PERCENT_DIGITS = 1
+
+
+def reduction_text(value: float | None, digits: int = PERCENT_DIGITS) -> str:
+    """A percent reduction as every table shows it: ``digits`` decimals, or :data:`NO_REDUCTION` for None."""
+    return NO_REDUCTION if value is None else f"{value:.{digits}f}"
 
 
 @dataclass(frozen=True)
@@ -68,6 +82,8 @@ class PeakTable:
         Decimals per value column; None: the row's own.
     note : str
         One line under the table (sources, definitions).
+    reduction_columns : tuple of int
+        The value columns that hold percent reductions (shown by :func:`reduction_text`).
     """
 
     title: str
@@ -76,6 +92,7 @@ class PeakTable:
     rows: tuple[PeakRow, ...]
     digits: tuple[int | None, ...]
     note: str = ""
+    reduction_columns: tuple[int, ...] = ()
 
     def row(self, key: str) -> PeakRow:
         """The row of quantity ``key``."""
@@ -85,11 +102,13 @@ class PeakTable:
         raise KeyError(f"table {self.title!r} has no row {key!r}; it has {', '.join(r.key for r in self.rows)}")
 
     def cell_text(self, row: PeakRow, column: int) -> str:
-        """Cell ``column`` of ``row``, formatted (:data:`ABSENT` when absent)."""
+        """Cell ``column`` of ``row``, formatted (:data:`ABSENT` when absent, :data:`NO_REDUCTION` for a reduction)."""
         value = row.values[column]
+        digits = self.digits[column]
+        if column in self.reduction_columns:
+            return reduction_text(value, PERCENT_DIGITS if digits is None else digits)
         if value is None:
             return ABSENT
-        digits = self.digits[column]
         return f"{value:.{row.digits if digits is None else digits}f}"
 
     def cells(self, row: PeakRow) -> list[str]:
@@ -140,3 +159,15 @@ class PeakTable:
         for row in self.rows:
             writer.writerow([row.label, row.key, row.unit, *("" if v is None else repr(float(v)) for v in row.values)])
         return buffer.getvalue()
+
+
+def without_reductions(table: PeakTable, reason: str) -> PeakTable:
+    """``table`` with every percent reduction taken out (shown as :data:`NO_REDUCTION`) and ``reason`` in its note.
+
+    For a run whose reductions must not be read as the controller's (its table did not
+    follow the record it was told): the peaks stay, the reductions go.
+    """
+    rows = tuple(replace(row, values=tuple(None if i in table.reduction_columns else value
+                                           for i, value in enumerate(row.values))) for row in table.rows)
+    note = f"{table.note} No reductions: {reason}".strip() if table.reduction_columns else table.note
+    return replace(table, rows=rows, note=note)

@@ -1,4 +1,8 @@
-"""Plots of the table, the bearing stroke and the control: table motion (target against achieved), stroke, force, S."""
+"""Plots of the table, the bearing stroke and the control: table motion (target against achieved), stroke, force, S.
+
+Time histories of several records get one panel (or block of panels) per record
+(:mod:`harness.report.record_groups`), each with its own legend.
+"""
 
 from __future__ import annotations
 
@@ -12,7 +16,28 @@ from matplotlib.axes import Axes
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend, mark_events, record_time, shade_interlocks
+from harness.report.record_groups import RecordGroup, record_groups
 from harness.report.reference import target_motion
+
+#: Height of one record's panel when a plot has one per record (px).
+PANEL_PX = 300
+
+
+def grouped_height(single_px: int, groups: Sequence[RecordGroup], panel_px: int = PANEL_PX) -> int:
+    """Pixel height of a plot: ``single_px`` for one record, ``panel_px`` per record (and titles) for several."""
+    return single_px if len(groups) == 1 else max(single_px, panel_px * len(groups) + 100)
+
+
+def usable_groups(runs: Sequence[RunData], usable) -> list[RecordGroup]:
+    """The record groups holding only the runs ``usable(run)`` accepts; groups left empty are dropped."""
+    groups = [group.having([bool(usable(run)) for run in group.runs]) for group in record_groups(runs)]
+    return [group for group in groups if group.runs]
+
+
+def title_panel(ax: Axes, group: RecordGroup) -> None:
+    """The record's name above its panel (nothing for a report of one record)."""
+    if group.title:
+        ax.set_title(group.title, loc="left", fontweight="bold")
 
 TARGET_COLOUR = "#000000"
 
@@ -25,24 +50,29 @@ def table_motion_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptio
         ("table_velocity_m_s", 1e3, "Velocity (mm/s)", "velocity_m_s"),
         ("table_displacement_m", 1e3, "Displacement (mm)", "displacement_m"),
     )
-    if not any(run.has(column) for run in runs for column, *_ in panels):
+    groups = usable_groups(runs, lambda run: any(run.has(column) for column, *_ in panels))
+    if not groups:
         return None
-    targets = [(run, target_motion(run)) for run in runs]
+    targets = {id(run): target_motion(run) for group in groups for run in group.runs}
     with matplotlib.rc_context(style()):
-        fig = figure(720)
-        axes = fig.subplots(3, 1, sharex=True)
-        for ax, (column, scale, label, target_field) in zip(axes, panels, strict=True):
-            for run, colour in zip(runs, colours(runs), strict=True):
-                if column in run.signals:
-                    ax.plot(record_time(run), run[column] * scale, color=colour, lw=1.0, label=f"{run.label} (sensors)")
-            for run, target in targets:
-                if target is not None:
-                    ax.plot(target.t_s, getattr(target, target_field) * scale, color=TARGET_COLOUR, ls="--", lw=0.9,
-                            label=f"{run.label}: target (processed record)")
-            ax.set_ylabel(label)
-        legend(axes[0])
-        axes[-1].set_xlabel("Record time (s)")
-        fig.suptitle("Shaking-table motion" + (": target against achieved" if any(t for _, t in targets) else ""))
+        fig = figure(grouped_height(720, groups, 3 * 200))
+        grid = fig.subplots(3 * len(groups), 1, sharex=True, squeeze=False)[:, 0]
+        for block, group in enumerate(groups):
+            axes = grid[3 * block : 3 * block + 3]
+            for ax, (column, scale, label, target_field) in zip(axes, panels, strict=True):
+                for run, colour, text in group.members():
+                    if column in run.signals:
+                        ax.plot(record_time(run), run[column] * scale, color=colour, lw=1.0, label=f"{text} (sensors)")
+                for run, _, text in group.members():
+                    target = targets[id(run)]
+                    if target is not None:
+                        ax.plot(target.t_s, getattr(target, target_field) * scale, color=TARGET_COLOUR, ls="--", lw=0.9,
+                                label=f"{text}: target (processed record)")
+                ax.set_ylabel(label)
+            title_panel(axes[0], group)
+            legend(axes[0])
+        grid[-1].set_xlabel("Record time (s)")
+        fig.suptitle("Shaking-table motion" + (": target against achieved" if any(targets.values()) else ""))
         return save(fig, "table_motion", "Table acceleration, velocity and displacement", out_dir)
 
 
@@ -62,25 +92,31 @@ def _limit_lines(ax: Axes, runs: Sequence[RunData]) -> bool:
 def stroke_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
     """Sliding stroke x_b (mm) against time, with the stroke limits where the runs have them, and interlock events."""
     del options
-    usable = [(run, c) for run, c in zip(runs, colours(runs), strict=True) if run.has("sliding_displacement_m")]
-    if not usable:
+    groups = usable_groups(runs, lambda run: run.has("sliding_displacement_m"))
+    if not groups:
         return None
     with matplotlib.rc_context(style()):
-        fig = figure(520)
-        ax = fig.subplots()
-        shaded = False
-        for run, colour in usable:
-            ax.plot(record_time(run), run["sliding_displacement_m"] * 1e3, color=colour, lw=1.0, label=run.label)
-            shaded |= shade_interlocks(ax, run, colour)
-            mark_events(ax, run, colour)
-        limits = _limit_lines(ax, [run for run, _ in usable])
-        ax.set_xlabel("Record time (s)")
-        ax.set_ylabel("Sliding displacement x_b (mm)")
-        extras = [text for text, present in (("dotted lines: events", any(run.events for run, _ in usable)),
+        fig = figure(grouped_height(520, groups))
+        axes = fig.subplots(len(groups), 1, sharex=True, sharey=True, squeeze=False)[:, 0]
+        shaded = limits = False
+        for ax, group in zip(axes, groups, strict=True):
+            for run, colour, text in group.members():
+                ax.plot(record_time(run), run["sliding_displacement_m"] * 1e3, color=colour, lw=1.0, label=text)
+                shaded |= shade_interlocks(ax, run, colour)
+                mark_events(ax, run, colour)
+            limits |= _limit_lines(ax, list(group.runs))
+            ax.set_ylabel("Sliding displacement x_b (mm)")
+            title_panel(ax, group)
+            legend(ax)
+        axes[-1].set_xlabel("Record time (s)")
+        extras = [text for text, present in (("dotted lines: events", any(run.events for g in groups for run in g.runs)),
                                              ("shading: interlock active", shaded)) if present]
         title = "Bearing stroke" + (" against its limits" if limits else "")
-        ax.set_title(title + (f" ({'; '.join(extras)})" if extras else ""))
-        legend(ax)
+        heading = title + (f" ({'; '.join(extras)})" if extras else "")
+        if len(groups) == 1:
+            axes[0].set_title(heading)
+        else:
+            fig.suptitle(heading + ", one panel per record")
         return save(fig, "stroke", title, out_dir)
 
 
@@ -121,43 +157,54 @@ def force_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> 
 def sliding_variable_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
     """The sliding variable S (mm/s) against time."""
     del options
-    usable = [(run, c) for run, c in zip(runs, colours(runs), strict=True) if run.has("sliding_variable_m_s")]
-    if not usable:
+    groups = usable_groups(runs, lambda run: run.has("sliding_variable_m_s"))
+    if not groups:
         return None
     with matplotlib.rc_context(style()):
-        fig = figure(440)
-        ax = fig.subplots()
-        for run, colour in usable:
-            ax.plot(record_time(run), run["sliding_variable_m_s"] * 1e3, color=colour, lw=1.0, label=run.label)
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_xlabel("Record time (s)")
-        ax.set_ylabel("Sliding variable S (mm/s)")
-        ax.set_title("Sliding variable S of each run's controller")
-        legend(ax)
+        fig = figure(grouped_height(440, groups, 260))
+        axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
+        for ax, group in zip(axes, groups, strict=True):
+            for run, colour, text in group.members():
+                ax.plot(record_time(run), run["sliding_variable_m_s"] * 1e3, color=colour, lw=1.0, label=text)
+            ax.axhline(0.0, color="k", lw=0.5)
+            ax.set_ylabel("Sliding variable S (mm/s)")
+            title_panel(ax, group)
+            legend(ax)
+        axes[-1].set_xlabel("Record time (s)")
+        heading = "Sliding variable S of each run's controller"
+        if len(groups) == 1:
+            axes[0].set_title(heading)
+        else:
+            fig.suptitle(heading + ", one panel per record")
         return save(fig, "sliding_variable", "Sliding variable", out_dir)
 
 
 def tracking_error_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
     """Table displacement achieved minus target (mm) for the runs that keep their target motion."""
     del options
-    usable = []
-    for run, colour in zip(runs, colours(runs), strict=True):
-        target = target_motion(run)
-        if target is not None and run.has("table_displacement_m"):
-            usable.append((run, colour, target))
-    if not usable:
+    targets = {id(run): target_motion(run) for run in runs}
+    groups = usable_groups(runs, lambda run: targets.get(id(run)) is not None and run.has("table_displacement_m"))
+    if not groups:
         return None
     with matplotlib.rc_context(style()):
-        fig = figure(400)
-        ax = fig.subplots()
-        for run, colour, target in usable:
-            t = record_time(run)
-            inside = (t >= target.t_s[0]) & (t <= target.t_s[-1])
-            error = run["table_displacement_m"][inside] - np.interp(t[inside], target.t_s, target.displacement_m)
-            ax.plot(t[inside], error * 1e3, color=colour, lw=0.9, label=run.label)
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_xlabel("Record time (s)")
-        ax.set_ylabel("Achieved - target (mm)")
-        ax.set_title("Table displacement tracking error (sensor minus processed record)")
-        legend(ax)
+        fig = figure(grouped_height(400, groups, 260))
+        axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
+        for ax, group in zip(axes, groups, strict=True):
+            for run, colour, text in group.members():
+                target = targets[id(run)]
+                assert target is not None  # usable_groups kept the runs with a target
+                t = record_time(run)
+                inside = (t >= target.t_s[0]) & (t <= target.t_s[-1])
+                error = run["table_displacement_m"][inside] - np.interp(t[inside], target.t_s, target.displacement_m)
+                ax.plot(t[inside], error * 1e3, color=colour, lw=0.9, label=text)
+            ax.axhline(0.0, color="k", lw=0.5)
+            ax.set_ylabel("Achieved - target (mm)")
+            title_panel(ax, group)
+            legend(ax)
+        axes[-1].set_xlabel("Record time (s)")
+        heading = "Table displacement tracking error (sensor minus processed record)"
+        if len(groups) == 1:
+            axes[0].set_title(heading)
+        else:
+            fig.suptitle(heading)
         return save(fig, "table_tracking", "Table displacement: achieved minus target", out_dir)

@@ -3,7 +3,8 @@
 Where some runs' peaks are far smaller than others' (a controlled eight-story building
 against its passive case), those runs would vanish into the zero line at the common scale:
 the peak profile then uses a logarithmic axis, and the drift plot adds a column with the
-small runs alone, at their own scale.
+small runs alone, at their own scale. Drift histories and hysteresis loops of several records
+get one block of panels (one panel) per record (:mod:`harness.report.record_groups`).
 """
 
 from __future__ import annotations
@@ -19,12 +20,16 @@ from harness.peaks import run_peaks
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend, peak_of, record_time, small_runs
+from harness.report.plots_control import grouped_height, title_panel, usable_groups
+from harness.report.record_groups import RecordGroup
 from harness.rowlayout import drift
 
 
-def drift_height_px(n_stories: int) -> int:
-    """Pixel height of the drift plot for ``n_stories`` panels."""
-    return max(420, 190 * n_stories + 90)
+def drift_height_px(n_stories: int, n_records: int = 1) -> int:
+    """Pixel height of the drift plot for ``n_stories`` panels (per record, for ``n_records`` records)."""
+    if n_records == 1:
+        return max(420, 190 * n_stories + 90)
+    return 150 * n_stories * n_records + 40 * n_records + 90
 
 
 def peak_profile_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
@@ -63,40 +68,50 @@ def peak_profile_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptio
         return save(fig, "peak_profile", "Peak drift and absolute acceleration over height", out_dir)
 
 
-def _drift_panels(axes: Sequence[Axes], runs: Sequence[RunData], run_colours: Sequence[str], stories: int,
-                  scale: float) -> None:
+def _drift_panels(axes: Sequence[Axes], group: RecordGroup, stories: int, scale: float) -> None:
     for panel, story in zip(axes, range(stories, 0, -1), strict=True):
-        for run, colour in zip(runs, run_colours, strict=True):
+        for run, colour, text in group.members():
             if drift(story) in run.signals:
-                panel.plot(record_time(run), run[drift(story)] * scale, color=colour, lw=1.0, label=run.label)
+                panel.plot(record_time(run), run[drift(story)] * scale, color=colour, lw=1.0, label=text)
         panel.text(0.005, 0.96, f"story {story}", transform=panel.transAxes, va="top", ha="left",
                    fontweight="bold", bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.5})
 
 
 def drift_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
-    """Interstory drift histories, one panel per story (top story at the top), runs overlaid.
+    """Interstory drift histories, one panel per story (top story at the top), runs overlaid; a block per record.
 
-    Runs whose peak drift is more than 5 times below the largest get a second column at their own scale.
+    Runs whose peak drift is more than 5 times below the largest of their record get a second
+    column at their own scale.
     """
     stories = max((run.n_stories for run in runs), default=0)
     if stories == 0:
         return None
     scale, unit = options.drift_scale()
-    run_colours = colours(runs)
-    small = small_runs([peak_of(run, [drift(j) for j in range(1, stories + 1)]) for run in runs])
+    groups = usable_groups(runs, lambda run: True)
+    smalls = [small_runs([peak_of(run, [drift(j) for j in range(1, stories + 1)]) for run in group.runs])
+              for group in groups]
+    columns = 2 if any(smalls) else 1
     with matplotlib.rc_context(style()):
-        fig = figure(drift_height_px(stories))
-        grid = fig.subplots(stories, 2 if small else 1, sharex=True, squeeze=False)
-        _drift_panels(list(grid[:, 0]), runs, run_colours, stories, scale)
-        if small:
-            grid[0, 0].set_title("All runs, one scale")
-            _drift_panels(list(grid[:, 1]), [runs[i] for i in small], [run_colours[i] for i in small], stories, scale)
+        fig = figure(drift_height_px(stories, len(groups)))
+        grid = fig.subplots(stories * len(groups), columns, sharex=True, squeeze=False)
+        for block, (group, small) in enumerate(zip(groups, smalls, strict=True)):
+            rows = grid[block * stories : (block + 1) * stories]
+            _drift_panels(list(rows[:, 0]), group, stories, scale)
+            if small:
+                _drift_panels(list(rows[:, 1]), group.having([i in small for i in range(len(group.runs))]), stories, scale)
+            elif columns == 2:
+                for ax in rows[:, 1]:
+                    ax.set_axis_off()
+            title_panel(rows[0, 0], group)
+            legend(rows[0, -1], source=rows[0, 0])
+        if columns == 2:
+            grid[0, 0].set_title("All runs, one scale", loc="center" if len(groups) == 1 else "right")  # left: the record
             grid[0, 1].set_title("Runs with small drifts, their own scale")
-        legend(grid[0, -1], source=grid[0, 0])
         for ax in grid[-1, :]:
             ax.set_xlabel("Time (s)")
         fig.supylabel(f"Interstory {unit}")
-        fig.suptitle("Interstory drift (story j: floor j minus floor j-1)")
+        fig.suptitle("Interstory drift (story j: floor j minus floor j-1)" + ("" if len(groups) == 1 else
+                                                                              ", a block of panels per record"))
         return save(fig, "drift", "Interstory drift time histories per story", out_dir)
 
 
@@ -116,25 +131,30 @@ def _weight(run: RunData) -> float | None:
 def hysteresis_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
     """Bearing hysteresis: friction force over the weight (F/W), or in kN without a weight, against x_b (mm)."""
     del options
-    usable = []
-    for run, colour in zip(runs, colours(runs), strict=True):
-        source = _hysteresis_source(run)
-        if source is not None and run.has("sliding_displacement_m"):
-            usable.append((run, colour, *source))
-    if not usable:
+    groups = usable_groups(runs, lambda run: _hysteresis_source(run) is not None and run.has("sliding_displacement_m"))
+    if not groups:
         return None
-    normalised = all(_weight(run) for run, *_ in usable)
+    normalised = all(_weight(run) for group in groups for run in group.runs)
     with matplotlib.rc_context(style()):
-        fig = figure(640)
-        ax = fig.subplots()
-        for run, colour, column, text in usable:
-            weight = _weight(run)
-            force = run[column] / weight if normalised and weight else run[column] * 1e-3
-            ax.plot(run["sliding_displacement_m"] * 1e3, force, color=colour, lw=0.8, label=f"{run.label} ({text})")
-        ax.set_xlabel("Sliding displacement x_b (mm)")
-        ax.set_ylabel("Friction force / weight, F/W (-)" if normalised else "Friction force (kN)")
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.axvline(0.0, color="k", lw=0.5)
-        legend(ax)
-        ax.set_title("Bearing hysteresis" + (" (F/W: the friction coefficient mobilised)" if normalised else ""))
+        fig = figure(grouped_height(640, groups, 360))
+        axes = fig.subplots(len(groups), 1, sharex=True, sharey=True, squeeze=False)[:, 0]
+        for ax, group in zip(axes, groups, strict=True):
+            for run, colour, label in group.members():
+                source = _hysteresis_source(run)
+                assert source is not None  # usable_groups kept the runs with a friction column
+                column, text = source
+                weight = _weight(run)
+                force = run[column] / weight if normalised and weight else run[column] * 1e-3
+                ax.plot(run["sliding_displacement_m"] * 1e3, force, color=colour, lw=0.8, label=f"{label} ({text})")
+            ax.set_ylabel("Friction force / weight, F/W (-)" if normalised else "Friction force (kN)")
+            ax.axhline(0.0, color="k", lw=0.5)
+            ax.axvline(0.0, color="k", lw=0.5)
+            title_panel(ax, group)
+            legend(ax)
+        axes[-1].set_xlabel("Sliding displacement x_b (mm)")
+        heading = "Bearing hysteresis" + (" (F/W: the friction coefficient mobilised)" if normalised else "")
+        if len(groups) == 1:
+            axes[0].set_title(heading)
+        else:
+            fig.suptitle(heading + ", one panel per record")
         return save(fig, "hysteresis", "Bearing hysteresis against sliding displacement", out_dir)

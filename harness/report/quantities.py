@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from harness.peaks import Peaks
+from harness.peaks import Peaks, reduction_pct
 
 
 @dataclass(frozen=True)
@@ -59,6 +59,10 @@ class Quantity:
         """The peak in the display unit (:attr:`scale` times the SI value); None when absent."""
         value = self.si_value(peaks)
         return None if value is None else value * self.scale
+
+    def reduction(self, passive: Peaks, controlled: Peaks) -> float | None:
+        """Percent reduction passive -> controlled (:func:`harness.peaks.reduction_pct`); None if not comparable."""
+        return reduction_pct(self.si_value(passive), self.si_value(controlled)) if self.comparable else None
 
 
 @dataclass(frozen=True)

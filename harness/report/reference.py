@@ -32,12 +32,17 @@ TARGET_FILE_KEY = "target_motion_file"
 G_M_S2 = 9.80665
 
 
+def _float(value: Any) -> float:
+    """A peak read back: JSON's ``null`` (a peak with nothing to measure) is NaN again."""
+    return float("nan") if value is None else float(value)
+
+
 def _peaks(data: Any) -> Peaks | None:
     """A :class:`Peaks` from its ``dataclasses.asdict`` form (stories as lists); None if malformed."""
     if not isinstance(data, Mapping):
         return None
     try:
-        values: dict[str, Any] = {key: tuple(map(float, value)) if isinstance(value, list) else float(value)
+        values: dict[str, Any] = {key: tuple(map(_float, value)) if isinstance(value, list) else _float(value)
                                   for key, value in data.items()}
         return Peaks(**values)
     except (TypeError, ValueError):

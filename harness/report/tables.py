@@ -20,9 +20,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from harness.peaks import Peaks, force_column, reduction_pct, run_peaks
+from harness.peaks import Peaks, force_column, run_peaks
 from harness.recording.reader import RunData
-from harness.report.peak_table import PeakRow, PeakTable
+from harness.report.peak_table import PERCENT_DIGITS, PeakRow, PeakTable
 from harness.report.quantities import (
     CONSOLE_WORDING,
     REPORT_WORDING,
@@ -32,9 +32,6 @@ from harness.report.quantities import (
     response_quantities,
 )
 
-#: Decimals of a percent reduction or difference.
-PERCENT_DIGITS = 1
-
 
 def _row(quantity: Quantity, values: Sequence[float | None]) -> PeakRow:
     return PeakRow(quantity.key, quantity.label, quantity.unit, quantity.digits, tuple(values))
@@ -42,8 +39,8 @@ def _row(quantity: Quantity, values: Sequence[float | None]) -> PeakRow:
 
 def _reduction_row(quantity: Quantity, passive: Peaks, controlled: Peaks) -> PeakRow:
     """Passive and controlled peaks (display units), then the percent reduction (None if not comparable)."""
-    reduction = reduction_pct(quantity.si_value(passive), quantity.si_value(controlled)) if quantity.comparable else None
-    return _row(quantity, (quantity.display_value(passive), quantity.display_value(controlled), reduction))
+    return _row(quantity, (quantity.display_value(passive), quantity.display_value(controlled),
+                           quantity.reduction(passive, controlled)))
 
 
 def _headings(wording: Wording) -> tuple[str, str]:
@@ -69,7 +66,7 @@ def reduction_table(
         return PeakTable(title, _headings(CONSOLE_WORDING), labels[:1], rows, (None,))
     rows = tuple(_reduction_row(q, passive, controlled) for q in quantities)
     columns = (*labels, "reduction %")
-    return PeakTable(title, _headings(CONSOLE_WORDING), columns, rows, (None, None, PERCENT_DIGITS))
+    return PeakTable(title, _headings(CONSOLE_WORDING), columns, rows, (None, None, PERCENT_DIGITS), reduction_columns=(2,))
 
 
 def _stories(runs: Sequence[RunData]) -> int:
@@ -92,7 +89,7 @@ def peaks_pair_table(passive: Peaks, controlled: Peaks, title: str, labels: tupl
     columns = (*labels, "reduction (%)")
     note = "reduction = (passive - hybrid) / passive. " + note
     return PeakTable(title, _headings(REPORT_WORDING), columns, _drop_empty(rows), (None, None, PERCENT_DIGITS),
-                     note.strip())
+                     note.strip(), reduction_columns=(2,))
 
 
 def pair_table(passive: RunData, controlled: RunData) -> PeakTable:

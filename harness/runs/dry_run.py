@@ -298,7 +298,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
         show_console=options.show_console,
         metadata={"record": motion_facts(motion), **truth_metadata(differences)},
-        notes=(truth_summary(differences),) if differences else (),
+        notes=((truth_summary(differences),) if differences else ()) + motion.warnings,
     )
     check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:

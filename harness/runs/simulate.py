@@ -8,11 +8,11 @@ sampling settings, and the results in the JSON layout of the issue tracker (SI).
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from harness import strict_json
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import (
     build_controller_for_rig,
@@ -84,11 +84,11 @@ class StudyResult:
 
     def write_json(self, path: str | Path) -> None:
         """Write :meth:`to_json` to ``path``."""
-        Path(path).write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        Path(path).write_text(strict_json.dumps(self.to_json(), indent=2) + "\n")
 
 
 def motion_facts(motion: GroundMotion) -> dict:
-    """Name, PGA (g), PGV (m/s), PGD (m), time scale and duration (s) of a processed motion."""
+    """Name, PGA (g), PGV (m/s), PGD (m), time scale, duration (s) and the share of Arias intensity the cut left out."""
     return {
         "name": motion.name,
         "pga_g": motion.pga_g,
@@ -96,6 +96,7 @@ def motion_facts(motion: GroundMotion) -> dict:
         "pgd_m": motion.pgd_m,
         "time_scale": motion.time_scale,
         "duration_s": motion.duration_s,
+        "arias_left_out": motion.arias_left_out,
     }
 
 

@@ -10,7 +10,6 @@ failed) writes what it has and compacts the parts into ``cases.parquet``.
 from __future__ import annotations
 
 import fcntl
-import json
 import platform
 import shutil
 import time
@@ -21,6 +20,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from harness import strict_json
 from harness.errors import ProfileError
 from harness.sweep.cases import CaseSpec
 from harness.sweep.engines import Engine
@@ -154,5 +154,5 @@ def write_metadata(
         "storage": ResultStore(folder).format, "report": report,
     }
     path = folder / METADATA
-    path.write_text(json.dumps(data, indent=2) + "\n")
+    path.write_text(strict_json.dumps(data, indent=2) + "\n")
     return path

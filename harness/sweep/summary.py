@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from harness.report.peak_table import reduction_text
 from harness.sweep.axes import SCALE_PREFIX
 from harness.sweep.rows import (
     CONTROLLED,
@@ -35,9 +36,11 @@ REDUCED = {
 }
 FORCE = "peak_force_pct_weight"
 ALL = "all"
-#: The columns of the short tables (console, summary.md); the CSV files hold every column.
-SHORT_REDUCTION = ["design", "record", "cases", "failed", "drift median %", "drift max %", "floor accel median %",
-                   "floor accel max %", "sliding median %", "sliding max %", "force median % W", "force max % W"]
+#: The columns of the short tables (console, summary.md); the CSV files hold every column. Each
+#: response's largest reduction comes with its smallest, the worst case (negative: it grew).
+SHORT_REDUCTION = ["design", "record", "cases", "failed", "drift median %", "drift min %", "drift max %",
+                   "floor accel median %", "floor accel min %", "floor accel max %", "sliding median %", "sliding min %",
+                   "sliding max %", "force median % W", "force max % W"]
 SHORT_PEAKS = ["design", "cases", SLIDING, "base_acceleration_m_s2", MAX_DRIFT, MAX_FLOOR_ACCELERATION, FORCE]
 
 
@@ -48,21 +51,34 @@ class Table:
     title: str
     header: list[str]
     rows: list[list[Any]]
+    #: The columns holding percent reductions (see :meth:`cells`).
+    reductions: frozenset[str] = frozenset()
 
     def select(self, names: Sequence[str]) -> Table:
         """The same table with only the columns ``names`` (those it has), in that order."""
         keep = [self.header.index(name) for name in names if name in self.header]
-        return Table(self.title, [self.header[i] for i in keep], [[row[i] for i in keep] for row in self.rows])
+        return Table(self.title, [self.header[i] for i in keep], [[row[i] for i in keep] for row in self.rows],
+                     self.reductions)
+
+    def cells(self, row: Sequence[Any], digits: int = 3) -> list[str]:
+        """The texts of ``row``, numbers to ``digits`` significant figures.
+
+        A missing reduction shows as :func:`harness.report.peak_table.reduction_text` shows it,
+        another missing number as ``-``.
+        """
+        def cell(value: Any, name: str) -> str:
+            if isinstance(value, float) and not np.isfinite(value):
+                return reduction_text(None) if name in self.reductions else "-"
+            if isinstance(value, float):
+                return f"{value:.{digits}g}"
+            return str(value)
+
+        return [cell(value, name) for value, name in zip(row, self.header, strict=True)]
 
     def to_markdown(self, digits: int = 3) -> str:
         """The table as Markdown, numbers to ``digits`` significant figures."""
-        def cell(value: Any) -> str:
-            if isinstance(value, float):
-                return "-" if not np.isfinite(value) else f"{value:.{digits}g}"
-            return str(value)
-
         lines = ["| " + " | ".join(self.header) + " |", "|" + "---|" * len(self.header)]
-        lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in self.rows]
+        lines += ["| " + " | ".join(self.cells(row, digits)) + " |" for row in self.rows]
         return "\n".join(lines)
 
 
@@ -146,10 +162,10 @@ def _summary_row(columns: Columns, rows: np.ndarray, design: str, record: str) -
 
 
 def reduction_table(columns: Columns, grid_keys: Sequence[str]) -> Table:
-    """Median, min and max % reduction of each response per design, per record and over all records."""
+    """Median, min (the worst case) and max % reduction of each response per design, per record and over all records."""
     header = ["design", "record", "cases", "failed"]
-    for heading in REDUCED.values():
-        header += [f"{heading} median %", f"{heading} min %", f"{heading} max %"]
+    reductions = [f"{heading} {how} %" for heading in REDUCED.values() for how in ("median", "min", "max")]
+    header += reductions
     header += ["force median % W", "force max % W"]
     designs = groups(design_labels(columns, grid_keys))
     records = groups(columns["record"])
@@ -161,7 +177,8 @@ def reduction_table(columns: Columns, grid_keys: Sequence[str]) -> Table:
             rows.append(_summary_row(columns, np.intersect1d(design_rows, record_rows), design, record))
         if len(records) > 1:
             rows.append(_summary_row(columns, design_rows, design, ALL))
-    return Table("% reduction against the passive case, per design and record", header, rows)
+    return Table("% reduction against the passive case, per design and record (min: the worst case; negative: the "
+                 "response grew)", header, rows, frozenset(reductions))
 
 
 def peak_names(columns: Columns) -> list[str]:

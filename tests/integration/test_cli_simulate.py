@@ -6,6 +6,7 @@ import json
 
 import pytest
 
+from harness import strict_json
 from harness.cli import main
 from harness.recording.reader import load_run
 from tests.conftest import PROFILES
@@ -28,7 +29,7 @@ def test_simulate_writes_the_documented_json(tmp_path, capsys):
     )
     assert status == 0
     assert "story 8 drift" in out and "reduction %" in out
-    doc = json.loads(path.read_text())
+    doc = strict_json.loads(path.read_text())  # null, never NaN: any parser reads it
     assert doc["profile"] == "eight_story" and doc["controller"] == "OF-I"
     assert set(doc["record"]) >= {"name", "pga_g", "pgv_m_s", "pgd_m", "time_scale", "duration_s"}
     assert doc["record"]["duration_s"] == pytest.approx(4.0)
@@ -46,7 +47,7 @@ def test_simulate_writes_the_documented_json(tmp_path, capsys):
 def test_simulate_none_runs_passive_only(tmp_path, capsys):
     path = tmp_path / "none.json"
     status, out, _ = _run(["simulate", "--duration", "2", "--controller", "none", "--json", str(path), "--quiet"], capsys)
-    doc = json.loads(path.read_text())
+    doc = strict_json.loads(path.read_text())  # null, never NaN: any parser reads it
     assert status == 0 and doc["controller"] == "none"
     assert doc["cases"]["controlled"] == doc["cases"]["passive"]
     assert "reduction" not in out

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from harness import strict_json
 from harness.cli import main
 from harness.peaks import Peaks, reduction_pct, run_peaks
 from harness.recording.reader import load_runs
@@ -23,7 +23,7 @@ def _peaks(drift_mm: float, sliding_mm: float) -> Peaks:
     return Peaks(sliding_mm * 1e-3, 1.0, (drift_mm * 1e-3,), (2.0,), 0.0)
 
 
-def test_the_summary_gives_mean_and_largest_reduction_per_controller() -> None:
+def test_the_summary_gives_mean_worst_and_largest_reduction_per_controller() -> None:
     cases = [
         BatchCase("a", "X", _peaks(10.0, 50.0), _peaks(1.0, 60.0)),
         BatchCase("b", "X", _peaks(20.0, 40.0), _peaks(10.0, 40.0)),
@@ -31,9 +31,11 @@ def test_the_summary_gives_mean_and_largest_reduction_per_controller() -> None:
         BatchCase("b", "Y", _peaks(20.0, 40.0), _peaks(5.0, 40.0)),
     ]
     summary = reduction_summary(cases)
-    assert summary.columns == ("X mean", "X max", "Y mean", "Y max")
-    assert summary.row("drift_1").values == pytest.approx((70.0, 90.0, 62.5, 75.0))
-    assert summary.row("sliding_displacement").values == pytest.approx((-10.0, 0.0, 0.0, 0.0))
+    assert summary.columns == ("X mean", "X min", "X max", "Y mean", "Y min", "Y max")
+    assert summary.row("drift_1").values == pytest.approx((70.0, 50.0, 90.0, 62.5, 50.0, 75.0))
+    # X's sliding displacement grew by 20 % on record a: the worst case shows it where "max" (0 %) hid it
+    assert summary.row("sliding_displacement").values == pytest.approx((-10.0, -20.0, 0.0, 0.0, 0.0, 0.0))
+    assert summary.cells(summary.row("sliding_displacement"))[3] == "-20.0"
     assert "force_percent_weight" not in [row.key for row in summary.rows]  # no reduction of a force
     peaks = peaks_per_record(cases)
     assert peaks.columns == ("a passive", "a X", "a Y", "b passive", "b X", "b Y")
@@ -61,7 +63,7 @@ def test_a_batch_writes_one_case_set_per_record_and_controller(batch) -> None:
     runs = load_runs([out / "study" / folders[0]])
     assert [run.case for run in runs] == ["passive", "controlled"]
     assert runs[1].metadata["controller"] == "FSF-I" and runs[1].record_name == "synthetic:1"
-    documents = json.loads((out / "batch.json").read_text())["runs"]
+    documents = strict_json.loads((out / "batch.json").read_text())["runs"]
     assert [(d["record"]["name"], d["controller"]) for d in documents] == [
         (record, controller) for record in RECORDS for controller in CONTROLLERS]
 
@@ -76,6 +78,7 @@ def test_the_batch_summary_matches_the_case_folders(batch) -> None:
             passive, controlled = load_runs([out / "study" / f"{record.replace(':', '-')}_{controller}"])
             reductions.append(reduction_pct(run_peaks(passive).drift_m[7], run_peaks(controlled).drift_m[7]))
         assert float(rows["drift_8"][f"{controller} mean"]) == pytest.approx(np.mean(reductions), rel=1e-9)
+        assert float(rows["drift_8"][f"{controller} min"]) == pytest.approx(np.min(reductions), rel=1e-9)
         assert float(rows["drift_8"][f"{controller} max"]) == pytest.approx(np.max(reductions), rel=1e-9)
     assert (out / "study" / "summary_peaks.csv").is_file() and (out / "study" / "summary.txt").is_file()
 

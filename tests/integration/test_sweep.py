@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from harness import strict_json
 from harness.cli import main
 from harness.sweep.store import ResultStore, have_pyarrow
 from tests.conftest import PROFILES, SHARED_RECORDS
@@ -226,7 +227,7 @@ def test_192_cases_on_local_workers_with_the_report(large_local):
     assert len(rows) == 192 and all(row["outcome"] == "ok" for row in rows.values())
     assert {row["controller"] for row in rows.values()} == {"FSF-I", "OF-I"}
     assert len({row["worker"] for row in rows.values()}) == 2, "both workers took cases"
-    meta = json.loads((folder / "local" / "sweep.json").read_text())
+    meta = strict_json.loads((folder / "local" / "sweep.json").read_text())
     assert meta["ran"] == 192 and meta["storage"] == ("parquet" if have_pyarrow() else "csv")
     assert (folder / "local" / "cases.csv").is_file()
     for name in ("summary.csv", "peaks.csv", "summary.md", "ida.csv", "ida.png", "fragility.csv", "fragility.png"):

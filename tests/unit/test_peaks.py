@@ -109,6 +109,24 @@ def test_reduction_pct_follows_the_spec_definition(passive, hybrid, expected) ->
     assert reduction_pct(passive, hybrid) == (pytest.approx(expected) if expected is not None else None)
 
 
+@pytest.mark.parametrize(
+    ("passive", "hybrid"),
+    [
+        (1.9e-15, 1.0e-5),  # a drift reference of a run that tripped before its record started (-5e11 %)
+        (2.7e-8, 0.040),  # its base acceleration: -1.5e8 %
+        (1e-7, 1e-7),  # numerically zero, however the controlled case compares
+        (1e-4, 0.2),  # a reference 2000 times below the response: below -99 900 %
+    ],
+)
+def test_no_reduction_against_a_reference_that_is_zero_or_off_the_response_scale(passive, hybrid) -> None:
+    assert reduction_pct(passive, hybrid) is None
+
+
+def test_a_large_growth_against_a_real_reference_is_still_shown() -> None:
+    assert reduction_pct(0.0149, 0.0317) == pytest.approx(-112.75, abs=0.01)  # Pacoima's sliding displacement under phi
+    assert reduction_pct(1e-3, 0.9) == pytest.approx(-89_900.0)  # 900 times the reference: at the floor, shown
+
+
 def test_peaks_are_frozen() -> None:
     peaks = Peaks(0.1, 1.0, (0.01,), (2.0,), 0.0)
     with pytest.raises(AttributeError):

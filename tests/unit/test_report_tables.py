@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.peaks import run_peaks
+from harness.peaks import Peaks, run_peaks
 from harness.recording import (
     RunData,
     canonical_columns,
@@ -16,6 +16,9 @@ from harness.recording import (
     write_simulation_case,
 )
 from harness.report import comparison_table, pair_table, reduction_table, runs_table
+from harness.report.batch_summary import BatchCase, reduction_summary
+from harness.report.peak_table import NO_REDUCTION, without_reductions
+from harness.report.tables import peaks_pair_table
 
 WEIGHT_N = 4 * 9.80665 * 1000.0
 N_STORIES = 3
@@ -145,7 +148,7 @@ def test_console_table_rows_labels_and_digits(pair) -> None:
                                       f"{1e3 * _peak(controlled['drift_1_m']):.3f}", "60.0"]
     assert table.cells(table.row("floor_acceleration_1"))[1] == "m/s²"
     force_row = table.row("force_percent_weight")
-    assert table.cells(force_row)[1:] == ["% weight", "0.00", f"{force_row.values[1]:.2f}", "-"]
+    assert table.cells(force_row)[1:] == ["% weight", "0.00", f"{force_row.values[1]:.2f}", NO_REDUCTION]
     assert table.to_rich().title == "title"
 
 
@@ -153,3 +156,31 @@ def test_console_table_of_a_passive_case_alone(pair) -> None:
     passive_run, _, _, _ = pair
     table = reduction_table(run_peaks(passive_run), None, "passive only")
     assert table.columns == ("passive",) and len(table.rows) == 3 * 2 + 3
+
+
+#: Peaks of a run that tripped before its record started: the passive reference simulated over
+#: no record at all is numerically zero (the values of the issue's dry run), the run's sensors read noise.
+_NOTHING_RAN = Peaks(6.7e-10, 2.7e-8, (1.9e-15, 2.4e-15, 5.5e-13), (2.2e-14, 2.7e-14, 1.9e-11), 0.0)
+_SENSOR_NOISE = Peaks(2e-5, 0.040, (1.0e-5, 1.6e-5, 1.0e-5), (0.056, 0.044, 0.036), 0.0)
+
+
+def test_a_zero_reference_shows_no_reduction_in_every_table() -> None:
+    console = reduction_table(_NOTHING_RAN, _SENSOR_NOISE, "tripped before the record")
+    report = peaks_pair_table(_NOTHING_RAN, _SENSOR_NOISE, "report", ("passive", "dry run"))
+    for table in (console, report):
+        for row in table.rows:
+            assert row.values[2] is None, row.key
+            assert table.cells(row)[-1] == NO_REDUCTION
+        assert table.to_text().count(NO_REDUCTION) == table.to_html().count(NO_REDUCTION) == len(table.rows)
+        assert all(line.endswith(",") for line in table.to_csv().splitlines()[1:])  # an empty cell, no number
+    batch = reduction_summary([BatchCase("a", "X", _NOTHING_RAN, _SENSOR_NOISE)])
+    assert all(value is None for row in batch.rows for value in row.values)
+
+
+def test_without_reductions_blanks_every_reduction_and_says_why(pair) -> None:
+    passive_run, controlled_run, _, _ = pair
+    table = pair_table(passive_run, controlled_run)
+    blanked = without_reductions(table, "the table did not follow its record.")
+    assert [row.values[:2] for row in blanked.rows] == [row.values[:2] for row in table.rows]
+    assert all(blanked.cells(row)[-1] == NO_REDUCTION for row in blanked.rows)
+    assert blanked.note.endswith("No reductions: the table did not follow its record.")

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from harness.report.peak_table import NO_REDUCTION
 from harness.sweep.curves import design_curves, fit_lognormal, fragility
-from harness.sweep.summary import design_labels, passive_rows, peaks_table, reduction_table
+from harness.sweep.summary import SHORT_REDUCTION, design_labels, passive_rows, peaks_table, reduction_table
 
 
 def test_the_fit_recovers_a_known_fragility():
@@ -57,6 +58,21 @@ def test_summary_per_design_and_record():
     peaks = peaks_table(columns, [])
     assert peaks.rows[0][:2] == ["passive", 4], "the passive simulations are counted once, not once per design"
     assert len(passive_rows(columns)) == 4
+
+
+def test_the_short_summary_shows_the_worst_growth_of_the_stroke_beside_the_largest_reduction():
+    columns = _columns()
+    growth = np.array([-10.0, 20.0, 5.0, -60.0, 30.0, 40.0, np.nan, np.nan])  # sliding: grew by 60 % once
+    columns["reduction_pct.sliding_displacement_m"] = growth
+    short = reduction_table(columns, []).select(SHORT_REDUCTION)
+    rows = {(row[0], row[1]): dict(zip(short.header, row, strict=True)) for row in short.rows}
+    assert rows[("FSF-I", "all")]["sliding max %"] == pytest.approx(20.0)
+    assert rows[("FSF-I", "all")]["sliding min %"] == pytest.approx(-60.0)  # what "max %" alone hid
+    assert rows[("FSF-I", "b")]["sliding min %"] == pytest.approx(-60.0)
+    assert "-60" in short.to_markdown()
+    # OF-I on record b has no comparable reference: no number, the table's mark for it
+    cells = dict(zip(short.header, short.cells(short.rows[[r[:2] for r in short.rows].index(["OF-I", "b"])]), strict=True))
+    assert cells["sliding min %"] == cells["sliding max %"] == NO_REDUCTION
 
 
 def test_ida_curves_per_design_with_the_passive_case_first():
