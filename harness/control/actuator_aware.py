@@ -102,6 +102,14 @@ share ``a``, the true ratio is at least ``(1 - a)/(1 + a)`` of the model's, so
 so that in the worst case the base mat keeps the phi surface's own damping ``m_b p1``.
 (0.46 x 94 kN s/m = 43 kN s/m, ``p2`` = 38 1/s for the shipped actuator and ``a = 0.3``.)
 
+Command range
+-------------
+The command is not the force: it exceeds the force by the flow the valve must pass,
+``(k_h / w_f) xdot_b`` (15 kN at the 0.16 m/s of El Centro's table at 0.34 g, time scale 2).
+The supervisor's force limit clamps the command, so where ``|u| + (k_h / w_f) |xdot_b|`` exceeds
+it the cylinder cannot stroke as fast as the table and drags the base mat along, whatever the
+design; the force the cylinder applies stays far below the limit.
+
 The design's actuator numbers (``k_h``, ``w_f``) come from the profile's actuator model
 (:class:`ActuatorModel`), never from a run's outcome.
 """
