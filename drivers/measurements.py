@@ -25,12 +25,16 @@ class Measurements:
         ``y_b``, base-mat absolute displacement (m).
     base_velocity_m_s : float
         ``ydot_b``, base-mat absolute velocity (m/s).
+    actuator_force_N : float
+        ``u``, the control actuator's force from its load cell (N); 0 where the source has none.
+        Not touched by :meth:`set`: whoever reads the load cell fills it.
     """
 
     table_displacement_m: float = 0.0
     table_velocity_m_s: float = 0.0
     base_displacement_m: float = 0.0
     base_velocity_m_s: float = 0.0
+    actuator_force_N: float = 0.0
 
     @property
     def sliding_displacement_m(self) -> float:

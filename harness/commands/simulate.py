@@ -130,6 +130,8 @@ def _print_study(console: Console, result: Any) -> None:
         if truth_note:
             console.print(f"  [yellow]note: {escape(truth_note)}[/]", highlight=False)
     controlled = result.cases.get("controlled")
+    if controlled is not None and controlled.extra.get("state_source", "measured") != "measured":
+        console.print(f"  [yellow]note: the controller read the {controlled.extra['state_source']}[/]", highlight=False)
     if controlled is not None and controlled.extra.get("outcome") == "tripped":
         console.print(f"[bold red]the controlled case tripped:[/] {escape(controlled.extra['trip_reason'])}")
     peaks = controlled.peaks if controlled is not None else None

@@ -1,7 +1,9 @@
 """Controller designs as profile entries, and building a controller from one.
 
 A profile's ``control.designs`` maps names (``FSF-I``, ``OF-I``, ``phi``) to one of
-the design dataclasses below, told apart by ``kind``.
+the design dataclasses below, told apart by ``kind``. The two ``*_actuator`` kinds are
+designed on the building augmented with the actuator's force state
+(:mod:`harness.control.actuator_aware`) and take the actuator model from ``rig.actuator``.
 """
 
 from __future__ import annotations
@@ -11,6 +13,14 @@ from typing import Literal
 
 import numpy as np
 
+from harness.control.actuator_aware import (
+    ActuatorModel,
+    ActuatorOutputSMC,
+    ActuatorStateFeedbackSMC,
+    actuator_lqr_surface,
+    augmented_model,
+    robust_sliding_margin,
+)
 from harness.control.controllers import Controller, PhiSMC, StateFeedbackSMC
 from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups
 from harness.errors import ModelError
@@ -84,7 +94,45 @@ class PhiDesign:
     delta: float = quantity(0.0, ge=0, doc=DELTA_DOC)
 
 
-ControllerDesign = FullStateDesign | StaticOutputDesign | SimpleOutputDesign | PhiDesign
+REACHING_DOC = "rate eta at which the actuator force reaches its surface (1/s); default the actuator model's w_f"
+
+
+@dataclass(frozen=True)
+class ActuatorLqrWeights:
+    """Diagonal LQR weights on the augmented state (Z, v): the groups of SPEC 6a and the net force."""
+
+    drifts: float = quantity(ge=0, doc="weight on every story drift (1/m^2 on the scale of the others)")
+    base_displacement: float = quantity(ge=0, doc="weight on y_b")
+    velocities: float = quantity(gt=0, doc="weight on every velocity")
+    force: float = quantity(gt=0, doc="weight q_v on the net base force v (1/N^2 on the same scale)")
+
+
+@dataclass(frozen=True)
+class StateFeedbackActuatorDesign:
+    """Full-state sliding-mode control designed with the actuator's force state (offline only)."""
+
+    kind: Literal["state_feedback_actuator"]
+    q: ActuatorLqrWeights
+    reaching_rate_per_s: float | None = quantity(None, unit="1/s", gt=0, doc=REACHING_DOC)
+
+
+@dataclass(frozen=True)
+class OutputActuatorDesign:
+    """The phi surface (Eq. 22-23) with the actuator's force as a state: base mat, table and load cell."""
+
+    kind: Literal["output_actuator"]
+    p1_per_s: float = quantity(unit="1/s", gt=0, doc="pole of the phi surface")
+    phi: float = quantity(ge=0, le=1, doc="share of the restraining springs cancelled")
+    delta: float = quantity(0.0, ge=0, doc=DELTA_DOC + "; second sliding pole p2 = delta / m_b^2")
+    reaching_rate_per_s: float | None = quantity(None, unit="1/s", gt=0, doc=REACHING_DOC)
+    actuator_uncertainty: float = quantity(
+        0.3, ge=0, lt=1, doc="relative error a of k_h and of w_f the design must survive; adds the margin of (A13)",
+    )
+
+
+ControllerDesign = (
+    FullStateDesign | StaticOutputDesign | SimpleOutputDesign | PhiDesign | StateFeedbackActuatorDesign | OutputActuatorDesign
+)
 
 
 def state_names(n_stories: int) -> list[str]:
@@ -114,12 +162,24 @@ def _measured_mask(measured: tuple[str, ...], n_stories: int) -> np.ndarray:
     return np.array([name in measured for name in names])
 
 
-def build_controller(name: str, design: ControllerDesign, design_building: BuildingConfig) -> Controller:
+def build_controller(
+    name: str, design: ControllerDesign, design_building: BuildingConfig, actuator: ActuatorModel | None = None,
+) -> Controller:
     """Make the controller ``name`` from its design, using ``design_building`` as the controller's model.
 
     ``design_building`` may differ from the plant's building (e.g. stiffness off by
-    -30 % for the robustness study of SPEC 6a).
+    -30 % for the robustness study of SPEC 6a). ``actuator`` is the actuator's design model,
+    needed by the ``*_actuator`` kinds only.
+
+    Raises
+    ------
+    ModelError
+        An actuator-aware design without an actuator model, or a surface that is not stable.
     """
+    if isinstance(design, (StateFeedbackActuatorDesign, OutputActuatorDesign)):
+        if actuator is None:
+            raise ModelError(f"design {name!r} ({design.kind}) needs the actuator's model (rig.actuator)")
+        return _build_actuator_aware(name, design, design_building, actuator)
     if isinstance(design, (SimpleOutputDesign, PhiDesign)):
         phi = 1.0 if isinstance(design, SimpleOutputDesign) else design.phi
         return PhiSMC(
@@ -129,3 +189,20 @@ def build_controller(name: str, design: ControllerDesign, design_building: Build
     model = state_space(design_building)
     mask = _measured_mask(design.measured, design_building.n_stories) if isinstance(design, StaticOutputDesign) else None
     return StateFeedbackSMC(name, model, p_row, design.delta, design.alpha_star, mask)
+
+
+def _build_actuator_aware(
+    name: str, design: StateFeedbackActuatorDesign | OutputActuatorDesign, design_building: BuildingConfig,
+    actuator: ActuatorModel,
+) -> Controller:
+    eta = actuator.bandwidth_rad_s if design.reaching_rate_per_s is None else design.reaching_rate_per_s
+    if isinstance(design, OutputActuatorDesign):
+        delta = design.delta + robust_sliding_margin(design_building.base_mass_kg, actuator, design.actuator_uncertainty)
+        return ActuatorOutputSMC(
+            name, design_building.base_mass_kg, design_building.restoring_stiffness_N_per_m, design.p1_per_s, design.phi,
+            delta, actuator, eta,
+        )
+    model = augmented_model(state_space(design_building), actuator)
+    q = design.q
+    q_state = q_diagonal_from_groups(design_building.n_stories, q.drifts, q.base_displacement, q.velocities)
+    return ActuatorStateFeedbackSMC(name, model, actuator_lqr_surface(model, q_state, q.force), eta)

@@ -6,9 +6,10 @@ and a run on the real rig all get the same design from the same profile.
 
 from __future__ import annotations
 
+from harness.control.actuator_aware import ActuatorModel
 from harness.control.controllers import Controller
-from harness.control.designs import build_controller
-from harness.errors import ProfileError
+from harness.control.designs import OutputActuatorDesign, StateFeedbackActuatorDesign, build_controller
+from harness.errors import ModelError, ProfileError
 from harness.profile import Profile
 
 
@@ -29,6 +30,11 @@ def require_design(profile: Profile, name: str) -> None:
         )
 
 
+def designed_with_actuator(profile: Profile, name: str) -> bool:
+    """The design ``name`` is actuator-aware: it needs a plant with the actuator and its load cell."""
+    return isinstance(profile.control.designs.get(name), (StateFeedbackActuatorDesign, OutputActuatorDesign))
+
+
 def make_controller(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
     """Build the named design of ``profile`` on its (possibly mis-scaled) design model.
 
@@ -43,14 +49,22 @@ def make_controller(profile: Profile, name: str, design_stiffness_scale: float =
     Raises
     ------
     ProfileError
-        If the profile has no such design.
+        If the profile has no such design, or an actuator-aware design's ``rig.actuator``
+        is not a model it can be designed on.
     """
     designs = profile.control.designs
     require_design(profile, name)
     design_building = profile.structure
     if design_stiffness_scale != 1.0:
         design_building = design_building.with_stiffness_scale(design_stiffness_scale)
-    return build_controller(name, designs[name], design_building)
+    design = designs[name]
+    if not designed_with_actuator(profile, name):
+        return build_controller(name, design, design_building)
+    try:
+        actuator = ActuatorModel.from_rig_actuator(profile.rig.actuator)
+    except ModelError as err:
+        raise ProfileError(str(err), profile.source_path, "rig.actuator.model") from err
+    return build_controller(name, design, design_building, actuator)
 
 
 def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
@@ -66,7 +80,7 @@ def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale
     if controller.needs_full_state:
         raise ProfileError(
             f"controller {name!r} needs the full state Z; a rig measures only x_0, xdot_0, y_b, ydot_b. "
-            "Use a phi or simple_output design on the table (full-state designs are for harness simulate)",
+            "Use a phi, simple_output or output_actuator design on the table (full-state designs are for harness simulate)",
             profile.source_path, "control.controller",
         )
     return controller

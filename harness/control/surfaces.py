@@ -17,10 +17,31 @@ so that delta has one meaning across controllers.
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 
 from harness.errors import ModelError
-from harness.model.building import StateSpace
+
+
+class InputModel(Protocol):
+    """What a surface design needs of a model: ``Xdot = A X + B u (+ disturbances)`` and m_b.
+
+    The building's :class:`~harness.model.building.StateSpace` (Eq. 6-7), or the building
+    augmented with the actuator's force state (:mod:`harness.control.actuator_aware`).
+    """
+
+    @property
+    def A(self) -> np.ndarray:  # noqa: N802 - the paper's name
+        """System matrix (N, N)."""
+
+    @property
+    def B(self) -> np.ndarray:  # noqa: N802 - the paper's name
+        """Input vector (N,)."""
+
+    @property
+    def base_mass_kg(self) -> float:
+        """m_b (kg), for the normalisation ``P B = 1/m_b``."""
 
 
 def regular_form(b_vector: np.ndarray) -> np.ndarray:
@@ -32,13 +53,13 @@ def regular_form(b_vector: np.ndarray) -> np.ndarray:
     return np.vstack([null_basis.T, (b / np.linalg.norm(b)).T])
 
 
-def _partition(model: StateSpace, matrix: np.ndarray):
+def _partition(model: InputModel, matrix: np.ndarray):
     t_matrix = regular_form(model.B)
     reduced = t_matrix @ matrix @ t_matrix.T
     return t_matrix, reduced[:-1, :-1], reduced[:-1, -1:]
 
 
-def _surface_from_gain(model: StateSpace, t_matrix: np.ndarray, gain: np.ndarray, a11: np.ndarray, a12: np.ndarray) -> np.ndarray:
+def _surface_from_gain(model: InputModel, t_matrix: np.ndarray, gain: np.ndarray, a11: np.ndarray, a12: np.ndarray) -> np.ndarray:
     closed = a11 - a12 @ gain.reshape(1, -1)
     eigenvalues = np.linalg.eigvals(closed)
     if np.max(eigenvalues.real) >= 0:
@@ -50,13 +71,14 @@ def _surface_from_gain(model: StateSpace, t_matrix: np.ndarray, gain: np.ndarray
     return p_row / (p_row @ model.B) / model.base_mass_kg
 
 
-def lqr_surface(model: StateSpace, q_diagonal: np.ndarray) -> np.ndarray:
+def lqr_surface(model: InputModel, q_diagonal: np.ndarray) -> np.ndarray:
     """Sliding surface P from LQR on the regular form (Eq. 9).
 
     Parameters
     ----------
-    model : StateSpace
-        The design model (may differ from the plant, for robustness studies).
+    model : InputModel
+        The design model (may differ from the plant, for robustness studies): the
+        building's StateSpace, or the building augmented with the actuator.
     q_diagonal : ndarray (N,)
         Diagonal of Q in this package's state order.
 
@@ -83,7 +105,7 @@ def lqr_surface(model: StateSpace, q_diagonal: np.ndarray) -> np.ndarray:
     return _surface_from_gain(model, t_matrix, gain, a11, a12)
 
 
-def pole_surface(model: StateSpace, poles_per_s: np.ndarray) -> np.ndarray:
+def pole_surface(model: InputModel, poles_per_s: np.ndarray) -> np.ndarray:
     """Sliding surface P placing the N-1 sliding-mode poles (1/s) by pole assignment."""
     poles = np.asarray(poles_per_s)
     t_matrix, a11, a12 = _partition(model, model.A)
@@ -103,7 +125,7 @@ def q_diagonal_from_groups(n_stories: int, drifts: float, base_displacement: flo
     return np.concatenate([np.full(n_stories, drifts), [base_displacement], np.full(n_stories + 1, velocities)])
 
 
-def sliding_poles(model: StateSpace, p_row: np.ndarray) -> np.ndarray:
+def sliding_poles(model: InputModel, p_row: np.ndarray) -> np.ndarray:
     """Eigenvalues of the motion on S = 0 (1/s): N-1 values, for checks and reports."""
     t_matrix, a11, a12 = _partition(model, model.A)
     w = p_row @ t_matrix.T  # S = w . (T Z)

@@ -16,6 +16,7 @@ from harness import strict_json
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import (
     build_controller_for_rig,
+    designed_with_actuator,
     make_controller,
     require_design,
 )
@@ -76,6 +77,7 @@ class StudyResult:
                 "friction_source": self.settings.friction_source,
                 "design_stiffness_scale": self.design_stiffness_scale,
                 "rig_effects": self.rig_effects,
+                "controller_state": controlled.extra.get("state_source", "measured" if self.rig_effects else "model"),
             },
             "total_weight_N": self.profile.structure.total_weight_N,
             "cases": {"passive": self.cases["passive"].peaks.as_json(), "controlled": controlled.peaks.as_json()},
@@ -196,6 +198,12 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     settings = sampling_settings(profile)
     scale = profile.control.design_stiffness_scale
     name = NO_CONTROLLER if options.controller == NO_CONTROLLER else profile.control.controller
+    if name != NO_CONTROLLER and designed_with_actuator(profile, name) and not options.rig_effects:
+        raise ProfileError(
+            f"controller {name!r} is designed with the rig's actuator (its force a state, read from the load cell); "
+            "the ideal simulation has no actuator: run it with --rig-effects",
+            profile.source_path, "control.controller",
+        )
     controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
     table = TableMotion.from_motion(motion)
     # With rig effects the passive case runs on the rig's truth (rig.truth), like the twin it is compared with.
@@ -212,9 +220,13 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     if controller is not None and options.rig_effects:
         from harness.simulation.twin import run_rig_twin
 
-        rig_controller = build_controller_for_rig(profile, name, scale)  # the same design as the ideal case
+        # The same design as the ideal case. A full-state design reads the twin's true plant state:
+        # an offline design study (labelled in the case's extra["state_source"]); a rig refuses it.
+        offline = controller.needs_full_state
+        rig_controller = make_controller(profile, name, scale) if offline else build_controller_for_rig(profile, name, scale)
         result.cases["controlled"] = run_rig_twin(
-            profile, motion, settings.rate_hz, rig_controller, asynchronous_delay_s=settings.transport_delay_s
+            profile, motion, settings.rate_hz, rig_controller, asynchronous_delay_s=settings.transport_delay_s,
+            offline_true_state=offline,
         )
     elif controller is not None:
         estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)

@@ -8,6 +8,11 @@ servo actuator (transport delay, dynamics, force and rate limits:
 safety supervisor between the controller and the actuator (force clamp, rate limit,
 stroke fade; trips end the case). This is what a dry run should reproduce within its
 statistics, and what a lab engineer checks an experiment design against.
+
+A controller reads what the rig measures: the table and base-mat sensors, and the actuator's
+force (``Measurements.actuator_force_N``, the load cell). With ``offline_true_state`` a
+full-state controller also reads the twin's true plant state Z: an offline design study
+that no rig can run (a rig does not measure the drifts).
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import numpy as np
 from harness import rowlayout as layout
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
+from harness.errors import ModelError
 from harness.peaks import peak_responses
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
@@ -45,6 +51,7 @@ _HELD = tuple(name for name in _RECORDED if name != layout.FORCE_MEASURED)
 def run_rig_twin(
     profile: Profile, motion, rate_hz: float, controller: Controller, seed: int | None = None, asynchronous_delay_s: float = 0.0,
     story_rate_hz: float | None = None, lockstep: bool = False, duration_s: float | None = None,
+    offline_true_state: bool = False,
 ) -> CaseResult:
     """Simulate the controlled case through the rig's sensor, actuator and safety models.
 
@@ -73,6 +80,9 @@ def run_rig_twin(
     duration_s : float, optional
         Simulate only this much of the record (s), e.g. the span a tripped dry run ran;
         default the whole record.
+    offline_true_state : bool
+        Hand the controller the plant's true Z at each sample (offline design studies of
+        full-state controllers only; a rig cannot). Without it the controller gets None.
 
     Returns
     -------
@@ -82,8 +92,15 @@ def run_rig_twin(
         their samples), the plant's true bearing state, the supervised command
         ``force_command_N`` and the actuator force ``force_measured_N``; peaks of those;
         ``extra["outcome"]``, ``extra["trip_reason"]`` and the true responses
-        (``extra["true_peaks"]``).
+        (``extra["true_peaks"]``); ``extra["state_source"]`` says what the controller read.
+
+    Raises
+    ------
+    ModelError
+        A full-state controller without ``offline_true_state``.
     """
+    if controller.needs_full_state and not offline_true_state:
+        raise ModelError("a full-state controller on the rig twin needs offline_true_state (a rig measures no drifts)")
     started = time.perf_counter()
     period = 1.0 / rate_hz
     rig = _TwinRig(profile, motion, period, seed, asynchronous_delay_s, lockstep)
@@ -97,9 +114,13 @@ def run_rig_twin(
     span_s = motion.duration_s if duration_s is None else min(duration_s, motion.duration_s)
     samples = CaseSamples(int(round(span_s * rate_hz)), rig.table.y.size, _RECORDED)
     story_every = max(1, int(round(rate_hz / (story_rate_hz or profile.can.story_sensor_rate_hz))))
-    samples.run(rig.table, _twin_sample(rig, controller, estimator, supervisor, health, samples.values, period, story_every))
+    true_state = profile.structure.n_stories * 2 + 2 if offline_true_state else 0
+    samples.run(rig.table, _twin_sample(rig, controller, estimator, supervisor, health, samples.values, period, story_every,
+                                        true_state))
     samples.close(rig.table.y, ending={layout.FORCE_MEASURED: rig.actuator.force_N}, held=_HELD)
-    return _twin_result(rig, samples, period, supervisor, profile.structure.total_weight_N, started)
+    result = _twin_result(rig, samples, period, supervisor, profile.structure.total_weight_N, started)
+    result.extra["state_source"] = "true plant state (offline design study)" if offline_true_state else "measured"
+    return result
 
 
 class _TwinRig:
@@ -161,11 +182,13 @@ class _TwinRig:
 
 def _twin_sample(
     rig: _TwinRig, controller: Controller, estimator: FrictionEstimator, supervisor: Supervisor, health: TickHealth,
-    values: dict[str, np.ndarray], period: float, story_every: int,
+    values: dict[str, np.ndarray], period: float, story_every: int, true_state: int = 0,
 ) -> Callable[[int], bool]:
     """One controller sample of the twin: read the sensors, estimate, control, supervise, record, advance.
 
     The returned ``sample(k)`` is False when the supervisor tripped (the case ends there).
+    ``true_state`` > 0 hands the controller the first ``true_state`` entries of the plant's
+    true state (Z, an offline design study); 0 hands it None, as on a rig.
     """
     meas, actuator = health.meas, rig.actuator
     table_read, base_read = rig.readings[_TABLE_MESSAGE], rig.readings[_BASE_MESSAGE]
@@ -185,9 +208,9 @@ def _twin_sample(
         for column, reading, i in reading_slots:
             column[k] = reading[i]
         meas.set(table_read[0], table_read[1], base_read[0], base_read[1])
-        health.measured_force_N = actuator.force_N
+        meas.actuator_force_N = health.measured_force_N = actuator.force_N
         friction = estimator.update(t, period, meas.sliding_velocity_m_s)
-        raw = controller.update(t, period, meas, friction, None)
+        raw = controller.update(t, period, meas, friction, rig.table.y[:true_state] if true_state else None)
         command = supervisor.update(t, period, health, raw)
         raw_force[k], command_force[k] = raw, command.force_N
         sliding_variable[k], friction_estimate[k] = controller.sliding_variable, friction
