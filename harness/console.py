@@ -27,7 +27,7 @@ from rich.table import Table
 from rich.text import Text
 
 from drivers.protocol_values import FaultCode
-from harness.loop.status import LoopStatus
+from harness.loop.status import TABLE_VERDICT_NAMES, LoopStatus
 from harness.paths import PROJECT_ROOT
 
 if TYPE_CHECKING:
@@ -94,6 +94,24 @@ def _story_rows(status: LoopStatus) -> list[tuple[str, str]]:
     return [("drift mm", drifts), ("floor acc. m/s²", accelerations)]
 
 
+#: Style of each table-check verdict (harness/safety/table_record.py).
+_VERDICT_STYLE = {"MATCH": "green", "MARGINAL": "bold yellow", "MISMATCH": "bold red"}
+
+
+def _table_check_text(status: LoopStatus) -> Text:
+    """The table against its record: the verdict and the latest measures (the verdict alone before them)."""
+    code = status.table_verdict
+    name = TABLE_VERDICT_NAMES[code] if 0 <= code < len(TABLE_VERDICT_NAMES) else f"code {code}"
+    if name == "OFF":
+        return Text("off (no record to compare the table with)", style="dim")
+    if name == "WAITING":
+        return Text("waiting for enough record motion to judge", style="dim")
+    text = Text(name.lower(), style=_VERDICT_STYLE.get(name, ""))
+    text.append(f"  correlation {status.table_correlation:.2f}, delay {status.table_delay_s * 1e3:+.1f} ms, "
+                f"amplitude {status.table_amplitude_ratio:.2f}")
+    return text
+
+
 def _events_text(status: LoopStatus) -> Text:
     lines = [line.strip() for line in status.recent_events()] or [status.last_event.strip() or "-"]
     return Text("\n".join(lines), overflow="ellipsis", no_wrap=True)
@@ -130,6 +148,7 @@ def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, f
     run_t_s, duration_s = s.run_t_s, s.duration_s
     done = 0.0 if duration_s <= 0 else min(1.0, run_t_s / duration_s)
     grid.add_row("record", f"{run_t_s:6.1f} / {duration_s:.1f} s  ({done * 100:5.1f} %)")
+    grid.add_row("table check", _table_check_text(s))
     grid.add_row("stroke x_b", _bar_row(s.stroke_m, soft_limit_m, hard_limit_m, f"{s.stroke_m * 1e3:+7.2f} mm",
                                         f"±{soft_limit_m * 1e3:.0f} soft, ±{hard_limit_m * 1e3:.0f} hard"))
     grid.add_row("force", _bar_row(s.force_N, force_limit_N, force_limit_N, f"{s.force_N / 1e3:+7.3f} kN",

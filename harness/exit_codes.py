@@ -8,5 +8,6 @@ INTERNAL_ERROR = 1
 INPUT_ERROR = 2
 #: The run tripped safely: force zeroed and drive disabled; the run folder says why.
 TRIPPED = 3
-#: The operator stopped the run early (Ctrl-C): safe stop completed, run folder marked so.
+#: The run was stopped early, safely (force ramped to zero, drive disabled): by the operator (Ctrl-C) or by a
+#: check whose action is a safe stop (its name is the run's reason, e.g. ``table_record_mismatch``).
 STOPPED = 4

@@ -74,6 +74,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace, console: Console) -> int:
+    from harness.report.table_check import table_check
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import DryRunOptions, dry_run
     from harness.runs.simulate import resolve_profile
@@ -104,11 +105,17 @@ def run(args: argparse.Namespace, console: Console) -> int:
     if result.span_s is not None:
         title += f", over the {result.span_s:.2f} s of record that ran before the run ended ({session.outcome})"
     assert result.passive is not None, "the command's dry run is compared (DryRunOptions.compare)"
-    table = reduction_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run"))
+    check = table_check(session.loop.table_record)  # a table that did not play the told record: no reductions
+    table = reduction_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run"),
+                            withheld=check.withheld, flagged=check.flagged)
     console.print(table.to_rich())
-    worst, difference_pct = result.largest_twin_difference()
-    console.print(f"against `harness simulate --rig-effects` (the rig's models offline): largest peak difference "
-                  f"{difference_pct:.1f} % ({worst})")
+    if check.withheld:
+        console.print("against `harness simulate --rig-effects`: not compared (the twin played the told record, "
+                      "the table did not)", highlight=False)
+    else:
+        worst, difference_pct = result.largest_twin_difference()
+        console.print(f"against `harness simulate --rig-effects` (the rig's models offline): largest peak difference "
+                      f"{difference_pct:.1f} % ({worst})")
     print_timing(console, session.loop.timing, result.profile.control.rate_hz)
     print_outcome(console, session, virtual_rig=not options.external_rig, weakened=profile.safety_weakened)
     if result.truth_note:

@@ -19,7 +19,8 @@ exit status:
   0  completed            3  tripped safely (force zeroed, drive disabled), or
   1  internal error (bug)     completed but the record was lost (repeat the test)
   2  bad input or refused configuration, before anything moved
-  4  stopped early by the operator (safe stop)
+  4  stopped early (safe stop) by the operator, or by a check (e.g. the table
+     not playing the told record)
 """
 
 #: Exit statuses of the offline commands (simulate, report, records): nothing moves, nothing trips.

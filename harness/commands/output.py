@@ -47,6 +47,7 @@ _HOST_TIMING_ON_A_VIRTUAL_RIG = ("sensor_stale", "actuator_status_stale")
 
 
 def print_outcome(console: Console, session, virtual_rig: bool = False, weakened: tuple = ()) -> None:
+    from harness.report.table_check import table_check
     from harness.safety.operator_detectors import HOST_TIMING_REMEDIES
     from harness.safety.weakening import summary
 
@@ -54,9 +55,15 @@ def print_outcome(console: Console, session, virtual_rig: bool = False, weakened
     reason = f" ({escape(session.trip_reason)})" if session.trip_reason else ""
     lost = f", [bold red]but the record is incomplete[/]: {escape(session.record_problem)}; repeat the test for its data" \
         if session.record_problem else ""
-    console.print(f"outcome: [{style}]{session.outcome}[/]{reason}{lost}; run folder {session.run_path}")
-    if session.loop.trip_detail:
-        console.print(f"  {escape(session.loop.trip_detail)}", highlight=False)
+    check = table_check(session.loop.table_record)  # the table against the record it was told (harness/safety/table_record.py)
+    doubtful = ", [bold yellow]with a warning: the table check is marginal[/]" if check.verdict == "marginal" else ""
+    console.print(f"outcome: [{style}]{session.outcome}[/]{reason}{lost}{doubtful}; run folder {session.run_path}")
+    if session.loop.trip_detail and not (check.verdict == "mismatch" and session.trip_reason == "table_record_mismatch"):
+        console.print(f"  {escape(session.loop.trip_detail)}", highlight=False)  # (the check's own line says it then)
+    if check.line:
+        check_style = {"mismatch": "bold red", "marginal": "bold yellow", "match": "green"}.get(check.verdict, "")
+        text = escape(check.line)
+        console.print(f"  [{check_style}]{text}[/]" if check_style else f"  {text}", highlight=False)
     realtime = not session.loop.timing.get("lockstep", False)
     if virtual_rig and realtime and session.trip_reason in _HOST_TIMING_ON_A_VIRTUAL_RIG:
         console.print(

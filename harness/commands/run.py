@@ -108,6 +108,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
         kind="run", can=can, duration_s=motion.duration_s,
         log_dir=Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
         metadata={"record": motion_facts(motion), "table_link": "can" if table_link is not None else "none"},
+        # the table check needs record time to be the table's: only where the harness starts the table
+        table_record=motion if table_link is not None else None,
+        table_check_off="table.link is none: record time follows the harness's clock, not the table's",
     )
     compile_kernels(console)
     session = run_session(profile, settings, console=console, on_host_timing=print_host_timing(console),

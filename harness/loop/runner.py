@@ -10,6 +10,7 @@ as ``k * period`` once the rig reports step ``k``.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -53,6 +54,8 @@ class LoopResult:
     realtime_report: list[str] = field(default_factory=list)
     operator_stopped: bool = False
     record_start_t_s: float | None = None
+    #: The table against its record (:meth:`harness.safety.table_record.TableRecordCheck.summary`).
+    table_record: dict = field(default_factory=dict)
 
 
 class ControlLoop:
@@ -226,6 +229,7 @@ class ControlLoop:
                     missed = self._note_stall(t, stall_s)
                     health.operator_stop = self.signals.stop_requested
                     health.operator_trip = self.signals.trip_requested
+                    health.record_time_s = t - run_started if run_started is not None and not self._awaiting_table else math.nan
                     started, cpu_started = time.perf_counter(), time.thread_time()
                     command = tick.run(t, dt, t, lateness, stall_s, missed, self.lockstep is None)
                     timing.add(lateness, time.perf_counter() - started, time.thread_time() - cpu_started)
@@ -243,23 +247,26 @@ class ControlLoop:
                 tick.send_disable(t)
             state = tick.supervisor.state
             outcome = _OUTCOME_OF.get(state, "stopped")
-            if outcome == "completed" and self.signals.stop_requested:
-                outcome = "stopped"
+            if outcome == "completed" and (self.signals.stop_requested or tick.supervisor.stop_reason):
+                outcome = "stopped"  # by the operator, or by a check's safe stop (its name is the reason)
         finally:
             tick.send_disable(self.scheduler.elapsed_s)
             self.signals.restore()
             restore_realtime(report)
             timing.overruns = self.scheduler.overruns
+        supervisor = tick.supervisor
+        stopped_by_check = outcome == "stopped" and not supervisor.command.trip_reason
         return LoopResult(
             outcome=outcome,
-            trip_reason=tick.supervisor.command.trip_reason,
-            trip_detail=tick.supervisor.trip_detail,
+            trip_reason=supervisor.stop_reason if stopped_by_check else supervisor.command.trip_reason,
+            trip_detail=supervisor.stop_detail if stopped_by_check else supervisor.trip_detail,
             timing={**timing.summary(), "threads": threads, "stalls_ridden_through": self.stalls,
                     "longest_stall_s": self.longest_stall_s, "stall_budget_s": self.max_stall_s,
                     "lockstep": self.lockstep is not None},
             realtime_report=report.lines,
             operator_stopped=self.signals.stop_requested,
             record_start_t_s=run_started,
+            table_record=supervisor.table_record.summary(),
         )
 
     def _update_status(
@@ -297,4 +304,7 @@ class ControlLoop:
         status.missed_periods = scheduler.overruns
         status.last_event = tick.last_event
         status.trip_reason = command.trip_reason
+        table = tick.supervisor.table_record
+        status.table_verdict = table.verdict
+        status.table_correlation, status.table_delay_s, status.table_amplitude_ratio, _ = table.latest_measures
         status.add_lateness(lateness_s)

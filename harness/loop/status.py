@@ -64,7 +64,14 @@ NUMBER_FIELDS = (
     ("missed_periods", True, "tick periods skipped by the scheduler"),
     ("fault_code", True, "the servo's fault code in the latest ACTUATOR_STATUS (drivers.protocol_values.FaultCode); 0 none"),
     ("n_stories", True, "stories whose drift and floor acceleration are published (set_story); 0 none"),
+    ("table_verdict", True, "the table against its record: a code of TABLE_VERDICT_NAMES"),
+    ("table_correlation", False, "the table check's latest correlation (NaN before its first evaluation)"),
+    ("table_delay_s", False, "the table check's latest delay of the table behind its record (s)"),
+    ("table_amplitude_ratio", False, "the table check's latest amplitude ratio, achieved over told"),
 )
+#: The table check's verdicts by code; the same names and values as
+#: :class:`harness.safety.table_record.TableVerdict` (not imported, as for :data:`STATE_NAMES`).
+TABLE_VERDICT_NAMES = ("OFF", "WAITING", "MATCH", "MARGINAL", "MISMATCH")
 #: Text fields: (name, capacity in UTF-8 bytes, default).
 TEXT_FIELDS = (("phase", 64, "starting"), ("last_event", 256, ""), ("trip_reason", 128, ""))
 #: Event lines kept for the console's scrolling list, and the UTF-8 bytes kept of each.
@@ -76,7 +83,7 @@ MAX_STORIES = 8
 _TEXT_SLOTS = (*TEXT_FIELDS, *((f"event_{i}", EVENT_LINE_BYTES, "") for i in range(EVENT_LINES)))
 _FIRST_EVENT_SLOT = len(TEXT_FIELDS)
 
-_MAGIC = float(0x53_5441_5402)  # "STAT" v2; exact in a float64 (40 bits)
+_MAGIC = float(0x53_5441_5403)  # "STAT" v3 (v3: the table check's cells); exact in a float64 (40 bits)
 _N_CELLS = 64
 _CELL_MAGIC = 0
 _CELL_FIRST_NUMBER = 1
@@ -258,6 +265,10 @@ class LoopStatus:
         missed_periods = _Field[int]()
         fault_code = _Field[int]()
         n_stories = _Field[int]()
+        table_verdict = _Field[int]()
+        table_correlation = _Field[float]()
+        table_delay_s = _Field[float]()
+        table_amplitude_ratio = _Field[float]()
         phase = _Field[str]()
         last_event = _Field[str]()
         trip_reason = _Field[str]()

@@ -22,6 +22,7 @@ from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
 from harness.loop.trip_outputs import TripOutputs
 from harness.memory import float_view
+from harness.safety.events import bit
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
@@ -60,6 +61,8 @@ _OVERRUN = _AT[layout.OVERRUN]
 _E2E_REJECTS = _AT[layout.E2E_REJECTS]
 _ERROR_FRAMES = _AT[layout.ERROR_FRAMES]
 _SEND_FAILURES = _AT[layout.SEND_FAILURES]
+#: The checks whose safe stop stops the table too: it plays another record than the one the harness was told.
+_STOPS_THE_TABLE = bit("table_record_mismatch")
 
 
 class TickRecorder(Protocol):
@@ -94,7 +97,7 @@ class ControlTick:
         (loop rate / ``can.estop_rate_hz``).
     stop_table : callable, optional
         ``stop_table(now)``: the table controller's stop (RIG_CONTROL stop), for the ``stop_table``
-        trip action; None when the run has no table link.
+        trip action and the safe stop of ``table_record_mismatch``; None when the run has no table link.
     """
 
     def __init__(
@@ -225,6 +228,8 @@ class ControlTick:
             self.send_disable(now)
             return
         self.trip_outputs.update(command.state, command.trip_reason, now)  # after the disable command, same tick
+        if command.acted & _STOPS_THE_TABLE:
+            self.trip_outputs.stop_the_table(now)  # once: the table plays the wrong record while the force ramps down
 
     def send_disable(self, now: float) -> None:
         """Command zero force with the drive disabled, whatever the state (on a trip and on the way out); never raises."""

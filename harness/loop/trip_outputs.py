@@ -11,6 +11,10 @@ profile's ``safety.trip_actions`` names for the class of the check that tripped
 2. ``stop_table``: one RIG_CONTROL stop to the table controller, where the run has a table
    link (``stop_table`` given).
 
+A safe stop that must also stop the table (``table_record_mismatch``: the table plays
+another record than the test plan's) sends the same RIG_CONTROL stop once
+(:meth:`TripOutputs.stop_the_table`), while the force ramps down.
+
 Nothing here allocates per tick: the plan per check is built once, the writer reuses its
 frames. A failed send is counted, never raised (the drive watchdog is the backstop).
 """
@@ -62,7 +66,7 @@ class TripOutputs:
 
     __slots__ = (
         "writer", "estop_every", "stop_table", "estop_frames", "table_stops", "failures", "_plan", "_tripped",
-        "_estop", "_reason", "_countdown",
+        "_estop", "_reason", "_countdown", "_table_stopped",
     )
 
     def __init__(
@@ -80,6 +84,7 @@ class TripOutputs:
         self._estop = False
         self._reason = 0
         self._countdown = 0
+        self._table_stopped = False
 
     @property
     def estop_asserted(self) -> bool:
@@ -121,6 +126,21 @@ class TripOutputs:
                 self.table_stops += 1
             except Exception:  # noqa: BLE001 - nothing more can be sent; the trip itself stands
                 self.failures += 1
+
+    def stop_the_table(self, now: float) -> None:
+        """Send the table controller's stop, once per run, outside a trip; never raises.
+
+        For a safe stop that must stop the table too (``table_record_mismatch``); nothing when the
+        run has no table link.
+        """
+        if self._table_stopped or self.stop_table is None:
+            return
+        self._table_stopped = True
+        try:
+            self.stop_table(now)
+            self.table_stops += 1
+        except Exception:  # noqa: BLE001 - nothing more can be sent; the safe stop itself stands
+            self.failures += 1
 
     def _send_estop(self, now: float) -> None:
         self._countdown = self.estop_every

@@ -65,13 +65,28 @@ def cross_correlation_delay(achieved: np.ndarray, drive: np.ndarray, dt_s: float
     for i, lag in enumerate(lags):  # sum over n of a[n] d[n - lag]
         scores[i] = np.dot(a[lag:], d[: len(d) - lag]) if lag >= 0 else np.dot(a[: len(a) + lag], d[-lag:])
     norm = math.sqrt(float(np.dot(a, a)) * float(np.dot(d, d)))
+    best, shift = correlation_peak(scores)
+    return (float(lags[best]) + shift) * dt_s, float(scores[best] / norm) if norm > 0.0 else math.nan
+
+
+def correlation_peak(scores: np.ndarray) -> tuple[int, float]:
+    """Where a cross-correlation peaks: the index of its largest score and a fraction of a lag step.
+
+    The fraction (in ``(-0.5, 0.5)``) is the vertex of the parabola through the peak and its two
+    neighbours; 0 at either end of the lags searched, or where the three do not curve down.
+
+    Parameters
+    ----------
+    scores : ndarray
+        The cross-correlation at consecutive lags (any scale).
+    """
     best = int(np.argmax(scores))
     shift = 0.0
-    if 0 < best < len(lags) - 1:
-        left, mid, right = scores[best - 1], scores[best], scores[best + 1]
+    if 0 < best < len(scores) - 1:
+        left, mid, right = float(scores[best - 1]), float(scores[best]), float(scores[best + 1])
         curvature = left - 2.0 * mid + right
         shift = 0.5 * (left - right) / curvature if curvature < 0.0 else 0.0
-    return (float(lags[best]) + shift) * dt_s, float(scores[best] / norm) if norm > 0.0 else math.nan
+    return best, shift
 
 
 def tracking(achieved: np.ndarray, drive: np.ndarray, dt_s: float, max_lag_s: float = 0.1) -> Tracking:

@@ -14,7 +14,9 @@ used in every table, legend, CSV header and file name. Which peak tables a set o
 
 Then the context: the record's facts, the table's target against achieved motion, the
 controller's parameters, the loop timing, and each run's events and interlocks. Among the
-warnings: a run whose virtual rig's truth differed from the design (``rig.truth``) says where.
+warnings: a run whose virtual rig's truth differed from the design (``rig.truth``) says where, and
+a run whose table did not play its record, or played it doubtfully (the table check,
+harness/report/table_check.py), says so; its reductions are then withheld, or flagged.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from harness.report.peak_table import PeakTable
 from harness.report.plots import PLOT_NAMES, PLOTS, PlotOptions
 from harness.report.reference import reference_tables, target_motion_table
 from harness.report.summary import summary_text
+from harness.report.table_check import run_table_check
 from harness.report.tables import comparison_table, pair_table, runs_table
 from harness.report.text_table import TextTable
 
@@ -151,6 +154,9 @@ def _record_warnings(runs: Sequence[RunData]) -> list[str]:
         truth = truth_note(run)
         if truth:
             notes.append(f"run {run.label}: {truth}")
+        check = run_table_check(run.metadata)
+        if check.verdict in ("mismatch", "marginal"):
+            notes.append(f"run {run.label}: {check.line}")
     return notes
 
 

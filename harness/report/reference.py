@@ -24,6 +24,7 @@ from harness.motions.tracking import Tracking, tracking
 from harness.peaks import Peaks, run_peaks
 from harness.recording.reader import RunData
 from harness.report.peak_table import PeakTable
+from harness.report.table_check import run_table_check
 from harness.report.tables import peaks_comparison_table, peaks_pair_table
 from harness.report.text_table import TextTable
 
@@ -64,17 +65,20 @@ def reference_tables(runs: Sequence[RunData]) -> list[PeakTable]:
         measured = run_peaks(run)
         passive, twin = _peaks(reference.get("passive_peaks")), _peaks(reference.get("twin_peaks"))
         note = _span_note(reference)
+        check = run_table_check(run.metadata)  # a table that did not play the told record: no reductions
         if passive is not None:
             tables.append(peaks_pair_table(
                 passive, measured, f"Against the simulated passive reference: {run.label}",
                 ("passive (sim.)", run.label), note + "The passive case simulated offline under the same record.",
+                check.withheld, check.flagged,
             ))
         if twin is not None:
             delay = reference.get("twin_delay", "")
+            caveat = f" Not comparable: {check.withheld}." if check.withheld else ""
             tables.append(peaks_comparison_table(
                 twin, measured, f"Against the rig twin: {run.label}", ("A: rig twin (sim.)", f"B: {run.label}"),
                 note + "Rig twin: harness simulate --rig-effects, the rig's sensor, actuator and safety models "
-                f"offline (asynchrony: {delay}).",
+                f"offline (asynchrony: {delay}).{caveat}",
             ))
     return tables
 

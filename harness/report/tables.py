@@ -31,16 +31,30 @@ from harness.report.quantities import (
     report_quantities,
     response_quantities,
 )
+from harness.report.table_check import run_table_check
 
 
 def _row(quantity: Quantity, values: Sequence[float | None]) -> PeakRow:
     return PeakRow(quantity.key, quantity.label, quantity.unit, quantity.digits, tuple(values))
 
 
-def _reduction_row(quantity: Quantity, passive: Peaks, controlled: Peaks) -> PeakRow:
-    """Passive and controlled peaks (display units), then the percent reduction (None if not comparable)."""
-    return _row(quantity, (quantity.display_value(passive), quantity.display_value(controlled),
-                           quantity.reduction(passive, controlled)))
+def _reduction_row(quantity: Quantity, passive: Peaks, controlled: Peaks, withheld: bool = False) -> PeakRow:
+    """Passive and controlled peaks (display units), then the percent reduction (None if not comparable or withheld)."""
+    reduction = None if withheld else quantity.reduction(passive, controlled)
+    return _row(quantity, (quantity.display_value(passive), quantity.display_value(controlled), reduction))
+
+
+def _caveat(heading: str, note: str, withheld: str, flagged: str) -> tuple[str, str]:
+    """The reduction column's heading and the table's note, with why its reductions are withheld or doubtful.
+
+    ``withheld``: the reductions are not shown (the table did not play the told record); ``flagged``:
+    they are shown, marked with ``*``, and doubtful (harness/report/table_check.py).
+    """
+    if withheld:
+        return heading, f"Reductions not shown: {withheld}. {note}".strip()
+    if flagged:
+        return heading + "*", f"*Doubtful: {flagged}. {note}".strip()
+    return heading, note
 
 
 def _headings(wording: Wording) -> tuple[str, str]:
@@ -49,6 +63,7 @@ def _headings(wording: Wording) -> tuple[str, str]:
 
 def reduction_table(
     passive: Peaks, controlled: Peaks | None, title: str, labels: tuple[str, str] = ("passive", "controlled"),
+    withheld: str = "", flagged: str = "",
 ) -> PeakTable:
     """The console's peak table: rows per story and for the base mat; passive, controlled and % reduction.
 
@@ -59,14 +74,19 @@ def reduction_table(
     title : str
     labels : tuple of (str, str)
         Column headings of the two cases (e.g. ``("passive (sim.)", "dry run")``).
+    withheld, flagged : str
+        Why the reductions are not shown, or shown but doubtful ("": shown as they are;
+        :class:`harness.report.table_check.TableCheck`).
     """
     quantities = response_quantities(passive.n_stories, CONSOLE_WORDING)
     if controlled is None:
         rows = tuple(_row(q, (q.display_value(passive),)) for q in quantities)
         return PeakTable(title, _headings(CONSOLE_WORDING), labels[:1], rows, (None,))
-    rows = tuple(_reduction_row(q, passive, controlled) for q in quantities)
-    columns = (*labels, "reduction %")
-    return PeakTable(title, _headings(CONSOLE_WORDING), columns, rows, (None, None, PERCENT_DIGITS), reduction_columns=(2,))
+    rows = tuple(_reduction_row(q, passive, controlled, bool(withheld)) for q in quantities)
+    heading, note = _caveat("reduction %", "", withheld, flagged)
+    columns = (*labels, heading)
+    return PeakTable(title, _headings(CONSOLE_WORDING), columns, rows, (None, None, PERCENT_DIGITS), note,
+                     reduction_columns=(2,))
 
 
 def _stories(runs: Sequence[RunData]) -> int:
@@ -82,21 +102,31 @@ def runs_table(runs: Sequence[RunData]) -> PeakTable:
                      _force_note(runs))
 
 
-def peaks_pair_table(passive: Peaks, controlled: Peaks, title: str, labels: tuple[str, str], note: str = "") -> PeakTable:
-    """Passive against controlled peaks (report rows) with the percent reduction beside the controlled value."""
+def peaks_pair_table(
+    passive: Peaks, controlled: Peaks, title: str, labels: tuple[str, str], note: str = "", withheld: str = "",
+    flagged: str = "",
+) -> PeakTable:
+    """Passive against controlled peaks (report rows) with the percent reduction beside the controlled value.
+
+    ``withheld`` / ``flagged``: why the reductions are not shown, or doubtful (see :func:`reduction_table`).
+    """
     stories = max(passive.n_stories, controlled.n_stories)
-    rows = tuple(_reduction_row(q, passive, controlled) for q in report_quantities(stories))
-    columns = (*labels, "reduction (%)")
-    note = "reduction = (passive - hybrid) / passive. " + note
+    rows = tuple(_reduction_row(q, passive, controlled, bool(withheld)) for q in report_quantities(stories))
+    heading, note = _caveat("reduction (%)", "reduction = (passive - hybrid) / passive. " + note, withheld, flagged)
+    columns = (*labels, heading)
     return PeakTable(title, _headings(REPORT_WORDING), columns, _drop_empty(rows), (None, None, PERCENT_DIGITS),
                      note.strip(), reduction_columns=(2,))
 
 
 def pair_table(passive: RunData, controlled: RunData) -> PeakTable:
-    """Passive against controlled peaks with the percent reduction beside the controlled value."""
+    """Passive against controlled peaks with the percent reduction beside the controlled value.
+
+    Withheld, or flagged, when the controlled run's table did not follow its record (harness/report/table_check.py).
+    """
     first = passive.label if "passive" in passive.label else f"passive: {passive.label}"
+    check = run_table_check(controlled.metadata)
     return peaks_pair_table(run_peaks(passive), run_peaks(controlled), f"Passive against controlled: {controlled.label}",
-                            (first, controlled.label), _force_note((controlled,)))
+                            (first, controlled.label), _force_note((controlled,)), check.withheld, check.flagged)
 
 
 def _difference_row(quantity: Quantity, first: Peaks, second: Peaks) -> PeakRow:

@@ -244,8 +244,9 @@ def serving_virtual_rig(
     """The virtual rig serving ``can`` for the duration of the block; yields the session's :class:`RigCoordinator`.
 
     On python-can's in-process ``virtual`` interface the rig runs in a thread of this process;
-    otherwise in its own process (:func:`_rig_process`), unless ``external_rig`` says one already
-    serves the channel. The rig is stopped, and its bus closed, however the block ends.
+    otherwise in its own process (:func:`_rig_process`); on either, none when ``external_rig`` says
+    one already serves the channel (on ``virtual``, a rig the caller runs in this process). The rig
+    is stopped, and its bus closed, however the block ends.
 
     Parameters
     ----------
@@ -264,7 +265,7 @@ def serving_virtual_rig(
     rig = rig_link = process = None
     switch_interval = sys.getswitchinterval()
     try:
-        if can.interface == "virtual":
+        if can.interface == "virtual" and not external_rig:
             # The rig shares this process: hand the interpreter lock over every 0.2 ms instead
             # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
             sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
@@ -299,6 +300,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         show_console=options.show_console,
         metadata={"record": motion_facts(motion), **truth_metadata(differences)},
         notes=((truth_summary(differences),) if differences else ()) + motion.warnings,
+        table_record=motion,  # the rig's table starts with RUNNING (RIG_CONTROL): record time is the table's
     )
     check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from drivers.link import HarnessLink
 from harness import exit_codes
@@ -34,7 +35,11 @@ from harness.recording.runfolder import check_log_dir
 from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
+from harness.safety.table_record import NO_RECORD
 from harness.safety.weakening import summary
+
+if TYPE_CHECKING:
+    from harness.motions import GroundMotion
 
 OUTCOME_EXIT = {"completed": exit_codes.OK, "tripped": exit_codes.TRIPPED, "stopped": exit_codes.STOPPED}
 
@@ -60,6 +65,11 @@ class SessionSettings:
     metadata: dict = field(default_factory=dict)
     #: Yellow lines of the live console for the whole run (e.g. where the rig's truth differs from the design).
     notes: tuple[str, ...] = ()
+    #: The record the table was told to play, compared online with the table's motion (harness/safety/table_record.py);
+    #: only where the table starts with the run (RIG_CONTROL), so that record time is the table's. None: no check.
+    table_record: GroundMotion | None = None
+    #: Why there is no table check, when ``table_record`` is None (for the outcome and metadata.json).
+    table_check_off: str = NO_RECORD
 
 
 @dataclass
@@ -208,6 +218,11 @@ def run_session(
         controller = build_controller_for_rig(profile, profile.control.controller)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
     supervisor = Supervisor(profile.safety, period_s=1.0 / profile.control.rate_hz)
+    record = settings.table_record
+    if record is not None:
+        supervisor.table_record.expect(record.velocity_m_s, record.dt_s, settings.duration_s, 1.0 / profile.control.rate_hz)
+    else:
+        supervisor.table_record.ignore(settings.table_check_off)
     if table_link is not None:
         on_start, stop_table = table_link.start, table_link.stop
     check_log_dir(settings.log_dir)  # before the bus opens: an unwritable log directory is bad input, nothing started
@@ -252,7 +267,7 @@ def run_session(
         bus = bus_statistics(link)
         folder.finish(result.outcome, trip_reason=result.trip_reason or None,
                       summary={"timing": result.timing, "realtime": result.realtime_report, "bus": bus,
-                               "record_start_t_s": result.record_start_t_s,
+                               "record_start_t_s": result.record_start_t_s, "table_record": result.table_record,
                                "host_timing": host_timing.as_dict() if host_timing else None})
         return SessionResult(result.outcome, result.trip_reason, folder.path, result, bus, folder.record_problem())
     except BaseException:

@@ -62,6 +62,8 @@ CHECK_NAMES: tuple[str, ...] = (
     "stop_ramp",
     "sensor_sign_flip",  # bit 29; appended: runs after sensor_stuck, before sensor_disagree (supervisor order)
     "estop_lost",  # bit 30; appended: the E-stop panel's heartbeat is older than safety.estop.max_panel_age_s
+    "table_record_mismatch",  # bit 31; appended: the table does not play the record the harness was told
+    "table_record_marginal",  # bit 32; appended: it follows it, but not as a healthy table does (a warning)
 )
 
 _INDEX: dict[str, int] = {name: index for index, name in enumerate(CHECK_NAMES)}

@@ -7,6 +7,7 @@ numbers and flags only; the supervisor never writes to it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from drivers.measurements import Measurements
@@ -57,6 +58,9 @@ class TickHealth:
         The operator asked for a controlled stop (first Ctrl-C).
     operator_trip : bool
         The operator asked for an immediate trip (second Ctrl-C, SIGTERM).
+    record_time_s : float
+        Time since the record started on the table (s), set by the loop; NaN while no record
+        plays (before RUNNING, or while the table has not yet reported running).
     """
 
     meas: Measurements = field(default_factory=Measurements)
@@ -83,3 +87,4 @@ class TickHealth:
     estop_panel_age_s: float = 0.0
     operator_stop: bool = False
     operator_trip: bool = False
+    record_time_s: float = math.nan

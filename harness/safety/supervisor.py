@@ -17,6 +17,8 @@ and is latched as the reason, later checks are not evaluated on that tick):
    ``bus_send_failures``, ``foreign_command``.
 5. Actuator: ``drive_fault``, ``hydraulic_pressure``, ``actuator_status_stale``, ``force_tracking``.
 6. ``loop_stall``.
+6b. The table against its record: ``table_record_mismatch`` (adds the tick's table velocity to the
+    comparison and judges it when due; a safe stop), then ``table_record_marginal`` (a warning).
 7. ``controller_output``: the raw force must be finite.
 8. Stroke trips: ``stroke_hard``, then ``stroke_predictive``.
 9. Force shaping: ``force_clamp`` -> ``stop_ramp`` (STOPPING; zero target in ARMED) ->
@@ -81,6 +83,7 @@ from harness.safety.sensor_detectors import (
     SensorStale,
     SensorStuck,
 )
+from harness.safety.table_record import TableRecordCheck, TableRecordMarginal, TableRecordMismatch
 
 _SLOT = {name: k for k, name in enumerate(CHECK_NAMES)}
 _B_CLAMP, _B_RATE, _B_SOFT = bit("force_clamp"), bit("force_rate"), bit("stroke_soft")
@@ -149,7 +152,7 @@ class Supervisor:
     __slots__ = (
         "config", "lifecycle", "command", "events", "act_ticks", "soft", "hard", "predictive", "clamp", "rate",
         "tracking", "_estop", "_operator_trip", "detectors", "_bits", "_slots", "_previous_N", "_ramp_gain",
-        "_last_acted", "period_s",
+        "_last_acted", "period_s", "table_record", "stop_reason", "stop_detail",
     )
 
     def __init__(self, config: SafetyConfig, period_s: float | None = None) -> None:
@@ -169,6 +172,11 @@ class Supervisor:
         self.rate = ForceRateLimit(config.force)
         self.tracking = ForceTracking(config.force)
         self._estop, self._operator_trip = EStop(), OperatorTrip()
+        #: The table against its record (:meth:`TableRecordCheck.expect` before the run; off until then).
+        self.table_record = TableRecordCheck(config.run.max_stall_s)
+        #: The check whose safe stop ended the run, and what it saw ("" when none did: the record's end, the operator).
+        self.stop_reason = ""
+        self.stop_detail = ""
         self.detectors: tuple[Detector, ...] = (
             self._estop, EStopLost(config.estop), self._operator_trip, OperatorStop(),
             SensorInvalid(config.sensors), SensorStale(config.sensors), SensorJump(config.sensors),
@@ -176,7 +184,7 @@ class Supervisor:
             BusGone(), BusOff(), BusErrorPassive(config.comms), BusErrorFrames(config.comms),
             E2eRejects(config.comms), BusSendFailures(config.comms), ForeignCommand(),
             DriveFault(), HydraulicPressure(), ActuatorStatusStale(config.actuator), self.tracking,
-            LoopStall(config.run),
+            LoopStall(config.run), TableRecordMismatch(self.table_record), TableRecordMarginal(self.table_record),
         )
         self._bits = tuple(bit(d.NAME) for d in self.detectors)
         self._slots = tuple(index(d.NAME) for d in self.detectors)
@@ -211,6 +219,8 @@ class Supervisor:
             detector.reset()
         self._previous_N = 0.0
         self._last_acted = 0
+        self.stop_reason = ""
+        self.stop_detail = ""
 
     def arm(self, t: float, health: TickHealth) -> None:
         """IDLE -> ARMED if every pre-arm check passes.
@@ -325,6 +335,9 @@ class Supervisor:
                 self.events.push(t, EventKind.FAULT, detector.NAME, detector.detail(health))
             if action is Action.SAFE_STOP and self.lifecycle.state in (State.ARMED, State.RUNNING):
                 self.stop(t, detector.NAME)
+                if detector.NAME != "operator_stop":  # the operator's own stop is no check's reason
+                    self.stop_reason = detector.NAME
+                    self.stop_detail = detector.detail(health)
         return False
 
     def _watch_idle(self, t: float, health: TickHealth) -> None:

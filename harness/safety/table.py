@@ -48,6 +48,7 @@ from harness.safety.sensor_detectors import (
     SensorStale,
     SensorStuck,
 )
+from harness.safety.table_record import TableRecordMarginal, TableRecordMismatch
 
 
 class SafetyRecord(NamedTuple):
@@ -75,7 +76,7 @@ _CLASSES: tuple[type[_DocumentedCheck], ...] = (
     SensorInvalid, SensorStale, SensorJump, SensorStuck, SensorDisagree, SensorSignFlip,
     E2eRejects, BusErrorFrames, BusErrorPassive, BusOff, BusSendFailures, BusGone, ForeignCommand,
     DriveFault, HydraulicPressure, ActuatorStatusStale, ForceTracking,
-    LoopStall, EStop, OperatorStop, OperatorTrip, EStopLost,
+    LoopStall, EStop, OperatorStop, OperatorTrip, EStopLost, TableRecordMismatch, TableRecordMarginal,
 )
 
 _INLINE = (

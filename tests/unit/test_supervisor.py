@@ -52,7 +52,7 @@ def test_detectors_run_in_the_documented_order() -> None:
         "sensor_invalid", "sensor_stale", "sensor_jump", "sensor_stuck", "sensor_sign_flip", "sensor_disagree",
         "bus_gone", "bus_off", "bus_error_passive", "bus_error_frames", "e2e_rejects", "bus_send_failures",
         "foreign_command", "drive_fault", "hydraulic_pressure", "actuator_status_stale", "force_tracking",
-        "loop_stall",
+        "loop_stall", "table_record_mismatch", "table_record_marginal",
     ]
     documented = supervisor_module.__doc__ or ""
     positions = [documented.index(f"``{name}``") for name in order]
