@@ -70,6 +70,7 @@ class DryRunOptions:
     external_rig: bool = False
     show_console: bool = True
     compare: bool = True
+    reset_drive: bool = False  # --reset-drive (with external_rig): reset the drive's latched fault before arming
 
 
 @dataclass
@@ -297,7 +298,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         log_dir=Path(options.log_dir) if options.log_dir else LOG_DIR, lockstep=options.lockstep,
         show_console=options.show_console,
         metadata={"record": motion_facts(motion), **truth_metadata(differences)},
-        notes=(truth_summary(differences),) if differences else (),
+        notes=(truth_summary(differences),) if differences else (), reset_drive=options.reset_drive,
     )
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:
         session = run_session(
