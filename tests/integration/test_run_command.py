@@ -73,3 +73,17 @@ def test_run_prints_the_peak_table_of_what_it_measured(tmp_path, monkeypatch, ca
         assert value is not None
         row = next(line for line in out.splitlines() if quantity.label in line)
         assert f"{value:.{quantity.digits}f}" in row, (quantity.label, row)
+
+
+def test_the_rig_terminal_prints_each_journal_line_on_one_stamped_line():
+    from rich.console import Console
+
+    from harness.commands.rig import print_journal_line
+
+    out = io.StringIO()
+    console = Console(file=out, width=40)
+    line = "drive FAULT, fault HEARTBEAT_WATCHDOG; the next run needs --reset-drive [sic]"
+    print_journal_line(console, 0.0, line)
+    printed = out.getvalue().splitlines()
+    assert len(printed) == 1 and printed[0].endswith(line), "one line, markup-looking text kept as it is"
+    assert printed[0][2] == ":" and printed[0][5] == ":", "stamped HH:MM:SS"
