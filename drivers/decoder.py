@@ -92,6 +92,12 @@ class Decoder:
         for state in self._states.values():
             state.counter.reset()
 
+    def reset_counter(self, frame_id: int) -> None:
+        """Forget the rolling-counter history of one message (a new sender): its next frame is accepted whatever its counter."""
+        state = self._states.get(frame_id)
+        if state is not None:
+            state.counter.reset()
+
     def _state(self, name: str) -> _RxState:
         try:
             return self._by_name[name]

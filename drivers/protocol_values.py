@@ -65,12 +65,30 @@ class RigCommand(IntEnum):
     RESET = 3
 
 
+#: Latched fault codes a DRIVE_RESET frame may clear, once their cause is gone: the watchdogs (the
+#: harness that stopped talking is back: it sent the reset), an E-stop latch (no E-stop asserted any
+#: more) and a pressure loss (pressure back). Any other code is the drive's own fault (INJECTED on the
+#: virtual rig, or a code of the drive's): not reset-able over CAN.
+RESETTABLE_FAULTS: frozenset[int] = frozenset(
+    {FaultCode.COMMAND_WATCHDOG, FaultCode.HEARTBEAT_WATCHDOG, FaultCode.PRESSURE_LOST, FaultCode.ESTOP}
+)
+
+
+def fault_name(code: int) -> str:
+    """The DBC's name of fault ``code`` (``"HEARTBEAT_WATCHDOG"``), or ``"code N"`` for one it does not name."""
+    try:
+        return FaultCode(int(code)).name
+    except ValueError:
+        return f"code {int(code)}"
+
+
 #: (message, signal) -> the enum that names its values; each must equal the DBC's ``VAL_`` table.
 VALUE_TABLES: dict[tuple[str, str], type[IntEnum]] = {
     ("ESTOP", "source"): EstopSource,
     ("ACTUATOR_STATUS", "drive_state"): DriveState,
     ("ACTUATOR_STATUS", "fault_code"): FaultCode,
     ("RIG_CONTROL", "command"): RigCommand,
+    ("DRIVE_RESET", "fault_code"): FaultCode,
 }
 
 

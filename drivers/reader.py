@@ -39,7 +39,7 @@ from drivers.protocol_values import DriveState, EstopSource
 #: What the harness receives (sensors, actuator status, rig status, E-stop).
 HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
 #: What the rig (servo controller and virtual rig) receives.
-RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP")
+RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP", "DRIVE_RESET")
 ESTOP_MESSAGE = "ESTOP"
 #: ESTOP ``source`` of the operator panel (the DBC's value table, :class:`~drivers.protocol_values.EstopSource`).
 PANEL_SOURCE = EstopSource.PANEL
@@ -432,7 +432,7 @@ class HarnessReader(FrameReader):
 
 
 class RigReader(FrameReader):
-    """The rig side (virtual rig, servo controller): commands, heartbeat, rig control, E-stop.
+    """The rig side (virtual rig, servo controller): commands, heartbeat, rig control, E-stop, drive reset.
 
     Parameters are those of :class:`HarnessReader`.
     """

@@ -24,7 +24,7 @@ from drivers.errors import ProtocolError
 from drivers.protocol_values import EstopSource
 
 #: What the harness sends.
-HARNESS_TX = ("ACTUATOR_CMD", "HEARTBEAT", "ESTOP", "RIG_CONTROL")
+HARNESS_TX = ("ACTUATOR_CMD", "HEARTBEAT", "ESTOP", "RIG_CONTROL", "DRIVE_RESET")
 #: What the rig (servo controller and virtual rig) sends.
 RIG_TX = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACTUATOR_STATUS", "RIG_STATUS", "ESTOP")
 STEP_INDEX_MODULO = 1 << 24
@@ -127,7 +127,7 @@ class FrameWriter:
 
 
 class HarnessWriter(FrameWriter):
-    """The harness side: actuator command, heartbeat, E-stop, rig control."""
+    """The harness side: actuator command, heartbeat, E-stop, rig control, drive reset."""
 
     def __init__(self, bus: can.BusABC, protocol: Protocol, health: BusHealth | None = None):
         super().__init__(bus, protocol, HARNESS_TX, health)
@@ -139,6 +139,8 @@ class HarnessWriter(FrameWriter):
         self._hb_values = [0.0]
         self._estop_values = [0.0, 0.0, 0.0]
         self._ctrl_values = [0.0, 0.0, 0.0, 0.0]
+        self._reset = self.frame("DRIVE_RESET")
+        self._reset_values = [0.0]
 
     def command(self, force_n: float, enable: bool, now: float) -> bool:
         """Send ACTUATOR_CMD: ``force_n`` (N, |force| <= 30 kN) and the enable bit."""
@@ -163,6 +165,15 @@ class HarnessWriter(FrameWriter):
         values = self._ctrl_values
         values[0], values[1], values[2], values[3] = command, (1.0 if lockstep else 0.0), fault_id, fault_param
         return self.send_frame(self._ctrl, values, now)
+
+    def drive_reset(self, fault_code: int, now: float) -> bool:
+        """Send DRIVE_RESET: the operator's reset of the drive's latched fault ``fault_code`` (0..255).
+
+        Send it once, before arming (never from the tick): the drive clears only a reset-able
+        latched fault whose code is ``fault_code`` (``drivers/PROTOCOL.md``).
+        """
+        self._reset_values[0] = fault_code
+        return self.send_frame(self._reset, self._reset_values, now)
 
 
 class RigWriter(FrameWriter):

@@ -3,7 +3,7 @@
 Defaults fit 500 Hz control on a 1 Mbit/s bus with about 30 % load (see
 :mod:`drivers.busload`). Every periodic message of ``drivers/rig.dbc`` takes its
 rate from one field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
-control) are budgeted at the rate they may burst at.
+control, drive reset) are budgeted at the rate they may burst at.
 
 The section is the harness's (built and checked by :mod:`harness.schema`); the
 drivers never see it. :mod:`harness.can_link` hands its values to the drivers as
@@ -30,6 +30,7 @@ RATE_FIELDS: dict[str, str] = {
     "FLOOR_ACCELS": "story_sensor_rate_hz",
     "RIG_CONTROL": "rig_control_rate_hz",
     "RIG_STATUS": "rig_status_rate_hz",
+    "DRIVE_RESET": "rig_control_rate_hz",  # one frame before arming; budgeted as the other harness event message
 }
 
 #: Further senders of a message, each at its own rate (Hz): the ESTOP ID carries the harness's
@@ -82,7 +83,9 @@ class CanConfig:
         20.0, unit="Hz", gt=0.0, le=1_000.0, doc="E-stop panel heartbeat (ESTOP, source 3, active=0) rate (budgeted)",
     )
     rig_status_rate_hz: float = quantity(50.0, unit="Hz", gt=0.0, le=10_000.0, doc="RIG_STATUS rate (virtual rig)")
-    rig_control_rate_hz: float = quantity(10.0, unit="Hz", gt=0.0, le=10_000.0, doc="RIG_CONTROL burst rate (budgeted)")
+    rig_control_rate_hz: float = quantity(
+        10.0, unit="Hz", gt=0.0, le=10_000.0, doc="RIG_CONTROL and DRIVE_RESET burst rate (budgeted)",
+    )
     timestamp_source: Literal["poll", "message"] = quantity("poll", doc="receive time: poll's now, or msg.timestamp")
     max_frames_per_poll: int = quantity(256, gt=0, doc="frames one poll handles at most")
     dbc_path: str = quantity("", doc="DBC file; empty = packaged drivers/rig.dbc")

@@ -7,10 +7,12 @@ import argparse
 from rich.console import Console
 from rich.markup import escape
 
+from harness import exit_codes
 from harness.commands.options import (
     EPILOG,
     LOOP_RATE_HELP,
     RATE,
+    RESET_DRIVE_HELP,
     add_bus_options,
     add_profile_options,
     add_record_options,
@@ -67,6 +69,7 @@ def add_parser(sub) -> None:
     loop.add_argument("--lockstep", action="store_true",
                       help="the rig advances one step per command (deterministic; slow machines)")
     loop.add_argument("--external-rig", action="store_true", help="a `harness rig` already serves the channel; do not start one")
+    loop.add_argument("--reset-drive", action="store_true", help=f"with --external-rig: {RESET_DRIVE_HELP}")
     output = parser.add_argument_group("output")
     output.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
     output.add_argument("--quiet", action="store_true", help="no live console")
@@ -79,6 +82,10 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.runs.dry_run import DryRunOptions, dry_run
     from harness.runs.simulate import resolve_profile
 
+    if args.reset_drive and not args.external_rig:
+        console.print("[bold red]error:[/] --reset-drive resets the drive of a rig that already serves the channel: "
+                      "add --external-rig (a rig this command starts has a fresh drive)", highlight=False)
+        return exit_codes.INPUT_ERROR
     profile = load_acknowledged(args, console)
     study = study_options(args, controller=args.controller, rate_hz=args.rate)
     resolved = resolve_profile(profile, study)  # dry_run resolves it again; checked here, before anything starts
@@ -87,7 +94,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     options = DryRunOptions(
         study=study, interface=args.interface,
         channel=args.channel, log_dir=args.log_dir, lockstep=args.lockstep, external_rig=args.external_rig,
-        show_console=not args.quiet,
+        show_console=not args.quiet, reset_drive=args.reset_drive,
     )
     compile_kernels(console)
     result = dry_run(profile, options, console, on_host_timing=print_host_timing(console))

@@ -56,6 +56,12 @@ def wrap(text: str) -> str:
 
 
 # Ranges of the numeric options; harness/input_limits.py gives the reason for each bound.
+#: ``--reset-drive`` of ``harness run`` and ``harness dry-run --external-rig``.
+RESET_DRIVE_HELP = (
+    "before arming, send the operator's reset of the drive's latched fault (a watchdog fault after the previous run "
+    "disconnected, or a released E-stop); refused, exit 2, for any other fault; recorded in the run's events"
+)
+
 RATE = limits.NumberRange(0.0, limits.MAX_RATE_HZ, "Hz")
 
 

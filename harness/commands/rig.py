@@ -33,9 +33,16 @@ def add_parser(sub) -> None:
             "Serve the virtual 4-DOF rig (table, plant on friction bearings, sensors, servo actuator with "
             "its drive watchdog, fault injection) on a CAN channel until Ctrl-C, in real time or in lockstep "
             "(one step per actuator command). The harness side is `harness dry-run --external-rig` on the "
-            "same channel. The drive is disabled on the way out."
+            "same channel; the banner prints that command. The rig serves run after run: when a run's harness "
+            "disconnects, the drive's heartbeat watchdog latches a fault, as a real servo drive does, and the next "
+            "run resets it with --reset-drive. The terminal prints each change of the drive, the harness's run and "
+            "the table, one line each. The drive is disabled on the way out."
         ),
-        epilog="example:\n  harness rig profiles/nceer_4dof.yaml --interface socketcan --channel vcan0\n\n" + EPILOG,
+        epilog=(
+            "examples:\n  harness rig                                   (seqpacket channel 'harness': no set-up)\n"
+            "  harness rig --lockstep\n"
+            "  harness rig profiles/nceer_4dof.yaml --interface socketcan --channel vcan0\n\n" + EPILOG
+        ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_profile_options(parser, "profile YAML (default: profiles/nceer_4dof.yaml)")
@@ -65,10 +72,34 @@ def run(args: argparse.Namespace, console: Console) -> int:
                           "(a Unix socket, no set-up) or --interface socketcan --channel vcan0", highlight=False)
             return exit_codes.INPUT_ERROR
         compile_kernels(console)
-        console.print(f"virtual rig on interface {can_config.interface!r}, channel {can_config.channel!r}"
-                      f"{' (lockstep)' if args.lockstep else ''}; `harness dry-run --external-rig --interface "
-                      f"{can_config.interface} --channel {can_config.channel}` reaches it; Ctrl-C stops it", highlight=False)
+        # soft wrap: the command line stays on one line, to be copied as it is
+        console.print(escape(banner(can_config.interface, can_config.channel, args.lockstep)), highlight=False,
+                      soft_wrap=True)
         truth_note = truth_summary(profile.rig_truth().differences)
         if truth_note:
             console.print(f"[yellow]{escape(truth_note)}[/]", highlight=False)
-        return serve_rig(profile, can_config, lockstep=args.lockstep, seed=args.seed, parent_pid=args.parent_pid)
+        return serve_rig(profile, can_config, lockstep=args.lockstep, seed=args.seed, parent_pid=args.parent_pid,
+                         on_journal=lambda wall_time_s, line: print_journal_line(console, wall_time_s, line))
+
+
+def harness_command(interface: str, channel: str, lockstep: bool) -> str:
+    """The ``harness dry-run`` command line that reaches a rig serving ``interface``/``channel``."""
+    return (f"harness dry-run --external-rig --interface {interface} --channel {channel}"
+            + (" --lockstep" if lockstep else ""))
+
+
+def banner(interface: str, channel: str, lockstep: bool) -> str:
+    """The rig's first lines: where it serves, the command that reaches it (on a line of its own), what later runs need."""
+    command = harness_command(interface, channel, lockstep)
+    return (f"virtual rig on interface {interface!r}, channel {channel!r}{' (lockstep)' if lockstep else ''}; "
+            f"from another terminal, with the record options given to this rig:\n  {command}\n"
+            "every later run adds --reset-drive (the drive latches its heartbeat watchdog when a run ends); "
+            "Ctrl-C stops the rig")
+
+
+def print_journal_line(console: Console, wall_time_s: float, line: str) -> None:
+    """One journal line of the rig, stamped with the local wall-clock time."""
+    import time
+
+    stamp = time.strftime("%H:%M:%S", time.localtime(wall_time_s))
+    console.print(f"{stamp} {escape(line)}", highlight=False, soft_wrap=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.markup import escape
@@ -12,6 +13,7 @@ from harness.commands.options import (
     EPILOG,
     LOOP_RATE_HELP,
     RATE,
+    RESET_DRIVE_HELP,
     add_bus_options,
     add_profile_options,
     add_record_options,
@@ -30,6 +32,11 @@ from harness.commands.output import (
     print_outcome,
     print_timing,
 )
+
+if TYPE_CHECKING:
+    from harness.motions import GroundMotion
+    from harness.profile import Profile
+    from harness.runs.session import SessionResult
 
 #: What ``table.link: none`` means for a run, printed before arming.
 NO_TABLE_LINK = (
@@ -58,10 +65,16 @@ def add_parser(sub) -> None:
         description=wrap(
             "Run the control loop against the real rig on a CAN channel: the same code as a dry run "
             "without the virtual rig. The lab's table controller plays the record; this command runs for "
-            "the record's duration (from the profile or --duration). It asks before it arms the actuator "
-            "(--yes skips the question). Ctrl-C stops safely (ramp down, drive off); a second Ctrl-C trips."
+            "the record's duration (from the profile or --duration). It asks before it arms the actuator, "
+            "naming the record, its PGA, time scale and duration (--yes skips the question). A drive that latched "
+            "a watchdog fault (every drive does when the previous run's harness disconnected) is reset with "
+            "--reset-drive. At the end it prints the run's peak responses. Ctrl-C stops safely (ramp down, drive "
+            "off); a second Ctrl-C trips."
         ),
-        epilog="example:\n  harness run profiles/my_rig.yaml --interface socketcan --channel can0\n\n" + EPILOG,
+        epilog=(
+            "examples:\n  harness run profiles/my_rig.yaml --interface socketcan --channel can0\n"
+            "  harness run profiles/my_rig.yaml --interface socketcan --channel can0 --reset-drive\n\n" + EPILOG
+        ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_profile_options(parser, "profile YAML of the rig")
@@ -71,6 +84,7 @@ def add_parser(sub) -> None:
                         help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}{LOOP_RATE_HELP}")
     parser.add_argument("--controller", type=non_empty, metavar="NAME", help="a design of the profile")
     parser.add_argument("--yes", action="store_true", help="do not ask before arming")
+    parser.add_argument("--reset-drive", action="store_true", help=RESET_DRIVE_HELP)
     parser.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
     parser.add_argument("--quiet", action="store_true", help="no live console")
     parser.set_defaults(handler=run)
@@ -90,15 +104,13 @@ def run(args: argparse.Namespace, console: Console) -> int:
     motion = prepare_motion(profile)
     rate = profile.control.rate_hz
     can = profile.can_settings(args.interface, args.channel)
-    controller = profile.control.controller
     table_link = _announce_table_link(profile, console)
     if not args.yes:
         try:
-            answer = console.input(
-                f"Arm the actuator on {can.interface}:{can.channel} with {controller} for {motion.duration_s:.1f} s "
-                f"(max force {profile.safety.force.max_force_N / 1e3:g} kN, "
-                f"hard stroke {profile.safety.stroke.hard_limit_m * 1e3:g} mm)? [y/N] "
-            )
+            # escaped: "[y/N]" is text, not rich markup; soft wrap: one line, the answer typed after it
+            console.print(escape(arm_prompt(profile, motion, can.interface, can.channel, args.reset_drive)), end="",
+                          soft_wrap=True, highlight=False)
+            answer = console.input()
         except (EOFError, OSError):  # no terminal to answer from (stdin closed or captured): that is a no
             answer = ""
         if answer.strip().lower() not in ("y", "yes"):
@@ -111,10 +123,48 @@ def run(args: argparse.Namespace, console: Console) -> int:
         # the table check needs record time to be the table's: only where the harness starts the table
         table_record=motion if table_link is not None else None,
         table_check_off="table.link is none: record time follows the harness's clock, not the table's",
+        reset_drive=args.reset_drive,
     )
     compile_kernels(console)
     session = run_session(profile, settings, console=console, on_host_timing=print_host_timing(console),
                           table_link=table_link)
+    print_run_peaks(console, profile, motion, session)
     print_timing(console, session.loop.timing, rate)
     print_outcome(console, session, weakened=profile.safety_weakened)
     return session.exit_code
+
+
+def arm_prompt(profile: Profile, motion: GroundMotion, interface: str, channel: str, reset_drive: bool = False) -> str:
+    """The question asked before arming: bus, controller, the record as the table will play it, the limits.
+
+    Plain text (the caller escapes it for rich: "[y/N]" is not markup).
+    """
+    verb = "Reset the drive's latched fault and arm" if reset_drive else "Arm"
+    return (
+        f"{verb} the actuator on {interface}:{channel} with {profile.control.controller}: record {motion.name}, "
+        f"PGA {motion.pga_g:.3f} g, time scale {motion.time_scale:g}, {motion.duration_s:.1f} s "
+        f"(max force {profile.safety.force.max_force_N / 1e3:g} kN, "
+        f"hard stroke {profile.safety.stroke.hard_limit_m * 1e3:g} mm)? [y/N] "
+    )
+
+
+def print_run_peaks(console: Console, profile: Profile, motion: GroundMotion, session: SessionResult) -> None:
+    """The run's peak responses, as the dry run prints them, without a reference: what the run measured."""
+    from harness.peaks import run_peaks
+    from harness.recording import load_run
+    from harness.report.tables import reduction_table
+    from harness.runs.dry_run import record_span_s
+
+    if session.record_problem:
+        console.print(f"[bold red]the recorder failed[/]: {escape(session.record_problem)}; the peaks below come "
+                      "from the rows written before that", highlight=False)
+    console.print(
+        f"[bold]{escape(profile.name)}[/] run, record [bold]{escape(motion.name)}[/]: PGA {motion.pga_g:.3f} g, "
+        f"PGD {motion.pgd_m * 1e3:.1f} mm, time scale {motion.time_scale:g}, {motion.duration_s:.1f} s", highlight=False,
+    )
+    title = "peak responses of the run (measured; no reference)"
+    span_s = record_span_s(session, motion)
+    if span_s is not None:
+        title += f", over the {span_s:.2f} s of record that ran before the run ended ({session.outcome})"
+    peaks = run_peaks(load_run(session.run_path))
+    console.print(reduction_table(peaks, None, title, labels=("run", "")).to_rich())

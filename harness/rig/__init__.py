@@ -31,8 +31,12 @@ The lockstep contract (the harness's lockstep loop is written to it):
    lockstep too: the service thread waits for frames with a short timeout and
    checks the watchdog after each wait; a drive-state change between steps is
    announced with one ACTUATOR_STATUS at once. While idle in lockstep the rig
-   repeats RIG_STATUS (same ``step_index``) at ``can.rig_status_rate_hz`` so a
-   harness that joins late finds it.
+   repeats ACTUATOR_STATUS (the last measured force, no new noise) and RIG_STATUS
+   (same ``step_index``) at ``can.rig_status_rate_hz`` so a harness that joins late
+   finds it and its drive's state.
+7. DRIVE_RESET (the operator's reset of the drive's latched fault, before a run) is
+   judged by the drive (:mod:`harness.rig.drive`); in lockstep the rig answers it with
+   one ACTUATOR_STATUS at once (same ``step_index``).
 6. RIG_CONTROL command 1 (start table) in lockstep starts the record with the next
    step: the step after it covers record time ``[0, T)``, and step ``k`` after the
    start reports record time ``k T``. In real time the record starts at the next

@@ -8,9 +8,20 @@ up to a timeout when asked, so the lockstep thread does not spin) and checks and
 decodes each with the drivers' :class:`~drivers.decoder.Decoder` (same E2E checks
 and counts). A damaged frame on the E-stop ID counts as a stop request, as in the
 drivers' reader.
+
+The rig outlives the harness: it serves run after run, each from a new harness process
+whose rolling counters start again at 0. A message silent for longer than
+:data:`NEW_SENDER_SILENCE_S` is therefore taken to come from a new sender: its counter
+history is forgotten before its next frame is checked (the E2E receiver's re-initialisation
+after a timeout), so the first RIG_CONTROL or DRIVE_RESET of a run is never lost as a
+"repeated" or "skipped" counter. Within a run the harness's periodic messages are never
+that silent, and the CRC, length and range checks always apply.
 """
 
 from __future__ import annotations
+
+import time
+from collections.abc import Callable
 
 import can
 
@@ -19,7 +30,10 @@ from drivers.decoder import Decoder, RxStatus
 from drivers.reader import RIG_RX
 from harness.errors import BusError
 
-NOTHING, COMMAND, HEARTBEAT, CONTROL, ESTOP, REJECTED, OTHER = 0, 1, 2, 3, 4, 5, 6
+#: A message silent this long (s) comes from a new sender: its counter history is forgotten.
+NEW_SENDER_SILENCE_S = 0.5
+
+NOTHING, COMMAND, HEARTBEAT, CONTROL, ESTOP, REJECTED, OTHER, DRIVE_RESET = 0, 1, 2, 3, 4, 5, 6, 7
 
 
 class RigInbox:
@@ -29,31 +43,37 @@ class RigInbox:
     ----------
     bus : can.BusABC
     protocol : Protocol
+    clock : callable
+        Monotonic clock (s) that times the silences (:data:`NEW_SENDER_SILENCE_S`).
 
     Attributes
     ----------
-    command, heartbeat, control, estop : list of float
+    command, heartbeat, control, estop, drive_reset : list of float
         Latest accepted values (DBC order, SI), updated in place.
     frames : int
         Frames taken off the bus.
     """
 
-    def __init__(self, bus: can.BusABC, protocol: Protocol):
+    def __init__(self, bus: can.BusABC, protocol: Protocol, clock: Callable[[], float] = time.monotonic):
         self.bus = bus
+        self.clock = clock
         self.decoder = Decoder(protocol, RIG_RX)
         self.command = self.decoder.values("ACTUATOR_CMD")
         self.heartbeat = self.decoder.values("HEARTBEAT")
         self.control = self.decoder.values("RIG_CONTROL")
         self.estop = self.decoder.values("ESTOP")
+        self.drive_reset = self.decoder.values("DRIVE_RESET")
         self._kinds = {
             protocol["ACTUATOR_CMD"].frame_id: COMMAND,
             protocol["HEARTBEAT"].frame_id: HEARTBEAT,
             protocol["RIG_CONTROL"].frame_id: CONTROL,
             protocol["ESTOP"].frame_id: ESTOP,
+            protocol["DRIVE_RESET"].frame_id: DRIVE_RESET,
         }
         self._estop_id = protocol["ESTOP"].frame_id
         self._estop_active = protocol["ESTOP"].index("active")
         self.frames = 0
+        self._last_heard = dict.fromkeys(self._kinds, -float("inf"))
 
     def receive(self, timeout_s: float = 0.0) -> int:
         """Take one frame (waiting up to ``timeout_s``) and return what it was.
@@ -61,7 +81,7 @@ class RigInbox:
         Returns
         -------
         int
-            NOTHING (no frame), COMMAND, HEARTBEAT, CONTROL (values updated), ESTOP
+            NOTHING (no frame), COMMAND, HEARTBEAT, CONTROL, DRIVE_RESET (values updated), ESTOP
             (a valid active stop or a damaged frame on the E-stop ID), REJECTED
             (failed a check, counted by the decoder) or OTHER (an inactive E-stop,
             an error frame, a foreign ID).
@@ -80,6 +100,12 @@ class RigInbox:
         self.frames += 1
         if msg.is_error_frame:
             return OTHER
+        frame_id = msg.arbitration_id
+        if frame_id in self._last_heard and not msg.is_extended_id:
+            now = self.clock()
+            if now - self._last_heard[frame_id] > NEW_SENDER_SILENCE_S:
+                self.decoder.reset_counter(frame_id)
+            self._last_heard[frame_id] = now
         status = self.decoder.decode(
             msg.arbitration_id, msg.data, is_data_frame=not (msg.is_remote_frame or msg.is_fd), extended=msg.is_extended_id
         )

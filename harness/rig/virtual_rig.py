@@ -33,7 +33,7 @@ from harness.can_config import CanConfig
 from harness.errors import ModelError
 from harness.rig import inbox
 from harness.rig.actuator import make_actuator
-from harness.rig.drive import Drive
+from harness.rig.drive import Drive, ResetVerdict
 from harness.rig.faults import (
     DRIVE_FAULT,
     ESTOP,
@@ -44,6 +44,7 @@ from harness.rig.faults import (
 )
 from harness.rig.history import History, record_columns
 from harness.rig.inbox import RigInbox
+from harness.rig.journal import RigJournal
 from harness.rig.parts import RigParts, RigState
 from harness.rig.publish import RigPublisher
 from harness.rig.runner import serve
@@ -116,7 +117,7 @@ class VirtualRig:
         self.drive = Drive(cfg.drive.watchdog_timeout_s)
         self.faults = FaultSet(schedule_from(cfg.faults))
         self.publisher = RigPublisher(writer, self.faults, self.sensors)
-        self.inbox = RigInbox(self.bus, protocol)
+        self.inbox = RigInbox(self.bus, protocol, clock)
         self.history = History(int(math.ceil(cfg.history_s / self.h)), self.table.y.size)
         can_settings = can_config or CanConfig()
         self.schedule = PublishSchedule(can_settings, self.h, self.step_period_s)
@@ -133,6 +134,12 @@ class VirtualRig:
         self._thread: threading.Thread | None = None
         self._stop_event = threading.Event()
         self.error: BaseException | None = None
+        #: Each state change, one line each, for a terminal that prints from its own thread (``harness rig``).
+        self.journal = RigJournal()
+        #: The latest DRIVE_RESET's verdict (None before the first).
+        self.last_reset: ResetVerdict | None = None
+        self._last_estop_frame_time = -math.inf
+        self._measured_force_N = 0.0
         self._reset_rig()
 
     # ----------------------------------------------------------------- state
@@ -152,6 +159,8 @@ class VirtualRig:
         self._last_status_time = -math.inf
         self._last_panel_time = -math.inf
         self._panel_next_step = 0
+        self._heard_harness = False
+        self.journal.forget()
         self.table.truth(self._truth, 0.0)
         self.sensors.reset(self._truth)
         self._update_faults()
@@ -180,16 +189,47 @@ class VirtualRig:
         self.faults.update(self.table.record_time_s if self.table.started else None)
         self.sensors.set_delays(self.faults.extra_delay_s, self.n_sub if self.lockstep else None)
 
-    def _update_drive(self, now: float) -> None:
+    def _injected_drive_code(self) -> int:
+        """The fault code of an injected drive fault present now (0: none)."""
         faults = self.faults
-        if faults.is_on(ESTOP):
+        if not faults.is_on(DRIVE_FAULT):
+            return 0
+        return int(min(max(faults.param[DRIVE_FAULT, 0], 0.0), 255.0)) or FaultCode.INJECTED
+
+    def _update_drive(self, now: float) -> None:
+        if self.faults.is_on(ESTOP):
             self.drive.on_estop()
-        code = 0
-        if faults.is_on(DRIVE_FAULT):
-            code = int(min(max(faults.param[DRIVE_FAULT, 0], 0.0), 255.0)) or FaultCode.INJECTED
         drive = self.config.drive
         self.drive.timeout_s = drive.lockstep_watchdog_timeout_s if self.lockstep else drive.watchdog_timeout_s
-        self.drive.update(now, self.pressure_ok, code)
+        self.drive.update(now, self.pressure_ok, self._injected_drive_code())
+
+    def _estop_asserted(self, now: float) -> bool:
+        """An E-stop is asserted now: the rig's E-stop fault, the panel pressed, or an active ESTOP frame lately.
+
+        "Lately": within the drive's watchdog timeout (an active stop is repeated at ``can.estop_rate_hz``).
+        """
+        return self.faults.is_on(ESTOP) or self.panel_pressed or now - self._last_estop_frame_time <= self.drive.timeout_s
+
+    def _on_drive_reset(self, now: float) -> None:
+        """A DRIVE_RESET frame: the drive judges it; the verdict is journalled and, in lockstep, announced at once."""
+        self._update_faults()
+        self._update_drive(now)
+        acknowledged = int(self.inbox.drive_reset[0])
+        verdict = self.drive.request_reset(
+            acknowledged, now, pressure_ok=self.pressure_ok, injected_code=self._injected_drive_code(),
+            estop_asserted=self._estop_asserted(now),
+        )
+        self.last_reset = verdict
+        self.journal.note(verdict.describe(acknowledged, self.drive.fault_code))
+        if self.lockstep:  # the harness waits for the verdict before it arms: no step comes to carry it
+            self._publish_status(now)
+            self._last_drive_state = self.drive.state
+
+    def _watch(self) -> None:
+        """Journal what changed (drive, harness, table); a few comparisons unless something did."""
+        drive, table = self.drive, self.table
+        self.journal.watch(drive.state, drive.fault_code, drive.harness_state if self._heard_harness else None,
+                           table.running, table.record_time_s)
 
     # --------------------------------------------------------------- physics
     def _substep(self) -> None:
@@ -245,7 +285,13 @@ class VirtualRig:
     def _publish_status(self, now: float) -> None:
         noise = self.config.actuator.force_noise_N
         measured = self.actuator.force_N + (noise * float(self._force_rng.standard_normal()) if noise > 0 else 0.0)
+        self._measured_force_N = measured
         self.publisher.status(measured, self.drive.state, self.pressure_ok, self.drive.fault_code, now)
+
+    def _repeat_status(self, now: float) -> None:
+        """ACTUATOR_STATUS again with the last measured force: the idle beacon draws no noise (lockstep stays
+        deterministic however often the wall clock fires it)."""
+        self.publisher.status(self._measured_force_N, self.drive.state, self.pressure_ok, self.drive.fault_code, now)
 
     def _publish_rig_status(self, now: float) -> None:
         table = self.table
@@ -280,6 +326,7 @@ class VirtualRig:
         command = int(command)
         if command == RigCommand.RESET:
             self._reset_rig()
+            self.journal.note("rig reset (RIG_CONTROL): plant at rest, every latch cleared, drive OFF")
         elif command == RigCommand.START_TABLE and not self.table.running and not self.armed:
             if self.lockstep:
                 self.armed = True
@@ -304,12 +351,16 @@ class VirtualRig:
             if self.lockstep:
                 self._step(now)
         elif kind == inbox.HEARTBEAT:
-            self.drive.on_heartbeat(now)
+            self._heard_harness = True
+            self.drive.on_heartbeat(now, int(self.inbox.heartbeat[0]))
             self._update_drive(now)
         elif kind == inbox.CONTROL:
             self._on_control(now)
         elif kind == inbox.ESTOP:
+            self._last_estop_frame_time = now
             self.drive.on_estop()
+        elif kind == inbox.DRIVE_RESET:
+            self._on_drive_reset(now)
 
     def _after_frames(self, now: float) -> None:
         self._update_faults()
@@ -321,7 +372,8 @@ class VirtualRig:
             self._publish_status(now)  # a watchdog trip between steps is announced at once
             self._last_drive_state = self.drive.state
         if self.lockstep and now - self._last_status_time >= self.schedule.rig_status_period_s:
-            self._last_status_time = now  # idle beacon: a harness that joins late still finds the rig
+            self._last_status_time = now  # idle beacon: a harness that joins late still finds the rig and its drive
+            self._repeat_status(now)
             self._publish_rig_status(now)
         if now - self._last_panel_time >= self._panel_period_s:  # the panel's own clock (idle lockstep too)
             self._publish_panel(now)
@@ -354,10 +406,12 @@ class VirtualRig:
             while kind != inbox.NOTHING:
                 handled += 1
                 self._handle(kind, now if wait_s == 0.0 else self.clock())
+                self._watch()
                 kind = self.inbox.receive(0.0)
             if wait_s:
                 now = self.clock()
             self._after_frames(now)
+            self._watch()
             return handled
 
     def _advance_to(self, now: float) -> None:
@@ -379,6 +433,7 @@ class VirtualRig:
             self._update_drive(now)
             self.drive.on_command(enable, force_N, now)
             self._step(now)
+            self._watch()
 
     def announce(self, now: float) -> None:
         """Publish the lockstep set for the current step (what entering lockstep sends)."""

@@ -71,6 +71,7 @@ class DryRunOptions:
     external_rig: bool = False
     show_console: bool = True
     compare: bool = True
+    reset_drive: bool = False  # --reset-drive (with external_rig): reset the drive's latched fault before arming
 
 
 @dataclass
@@ -301,6 +302,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         metadata={"record": motion_facts(motion), **truth_metadata(differences)},
         notes=((truth_summary(differences),) if differences else ()) + motion.warnings,
         table_record=motion,  # the rig's table starts with RUNNING (RIG_CONTROL): record time is the table's
+        reset_drive=options.reset_drive,
     )
     check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:

@@ -4,6 +4,11 @@ The CLI parses the arguments and calls :func:`run_rig_command`; this module does
 the rest: load the profile and record, open the bus (checked by
 :func:`harness.can_link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
 event, then stop cleanly: drive disabled and announced, bus shut down.
+
+The rig serves run after run. Each change it sees (the drive's state and fault, the
+harness's run, the table, a drive reset) is queued by the rig's thread in its journal
+(:mod:`harness.rig.journal`); this thread, which only waits for the stop, hands the lines
+to ``on_journal`` every :data:`JOURNAL_PERIOD_S`, so printing never delays the physics.
 """
 
 from __future__ import annotations
@@ -23,6 +28,9 @@ from harness.profile import Profile, load_profile
 from harness.rig.virtual_rig import VirtualRig
 from harness.runs.simulate import StudyOptions, prepare_motion, resolve_profile
 
+#: How often the serving thread checks for the stop and prints the rig's journal (s).
+JOURNAL_PERIOD_S = 0.1
+
 
 def run_rig_command(
     profile_path: str | Path | None,
@@ -38,6 +46,7 @@ def run_rig_command(
     clock: Callable[[], float] = time.monotonic,
     on_ready: Callable[[VirtualRig], None] | None = None,
     parent_pid: int | None = None,
+    on_journal: Callable[[float, str], None] | None = None,
 ) -> int:
     """Serve the virtual rig until Ctrl-C or ``stop_event``; return an exit status.
 
@@ -69,6 +78,9 @@ def run_rig_command(
     parent_pid : int, optional
         Stop (drive disabled and announced) once this process is gone: a dry run that
         started the rig and died must not leave it serving.
+    on_journal : callable, optional
+        ``on_journal(wall_time_s, line)``: each state change of the rig (drive, harness run,
+        table, drive reset), called from this thread, never from the rig's.
 
     Returns
     -------
@@ -86,7 +98,7 @@ def run_rig_command(
     options = options or StudyOptions()
     profile = resolve_profile(load_profile(profile_path, variant, overrides), options)
     return serve_rig(profile, profile.can_settings(interface, channel), lockstep=lockstep, seed=seed,
-                     stop_event=stop_event, clock=clock, on_ready=on_ready, parent_pid=parent_pid)
+                     stop_event=stop_event, clock=clock, on_ready=on_ready, parent_pid=parent_pid, on_journal=on_journal)
 
 
 def serve_rig(
@@ -99,6 +111,7 @@ def serve_rig(
     clock: Callable[[], float] = time.monotonic,
     on_ready: Callable[[VirtualRig], None] | None = None,
     parent_pid: int | None = None,
+    on_journal: Callable[[float, str], None] | None = None,
 ) -> int:
     """Serve the virtual rig of a resolved ``profile`` on ``can_config`` until stopped.
 
@@ -119,17 +132,25 @@ def serve_rig(
         try:
             if on_ready is not None:
                 on_ready(rig)
-            while not stop.wait(0.1) and rig.serving and _alive(parent_pid):
-                pass
+            while not stop.wait(JOURNAL_PERIOD_S) and rig.serving and _alive(parent_pid):
+                _print_journal(rig, on_journal)
         except KeyboardInterrupt:
             status = exit_codes.STOPPED
         finally:
             rig.stop()
+            _print_journal(rig, on_journal)
     if isinstance(rig.error, (*EXPECTED_ERRORS, OSError)):
         raise BusError(f"the virtual rig stopped serving: {rig.error}") from rig.error
     if rig.error is not None:
         raise rig.error
     return status
+
+
+def _print_journal(rig: VirtualRig, on_journal: Callable[[float, str], None] | None) -> None:
+    """Hand the rig's journalled lines to ``on_journal`` (this thread: the rig's own never prints)."""
+    for wall_time_s, line in rig.journal.drain():
+        if on_journal is not None:
+            on_journal(wall_time_s, line)
 
 
 def _alive(pid: int | None) -> bool:

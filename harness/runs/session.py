@@ -70,6 +70,8 @@ class SessionSettings:
     table_record: GroundMotion | None = None
     #: Why there is no table check, when ``table_record`` is None (for the outcome and metadata.json).
     table_check_off: str = NO_RECORD
+    #: ``--reset-drive``: reset the drive's latched fault before arming (:mod:`harness.runs.drive_reset`).
+    reset_drive: bool = False
 
 
 @dataclass
@@ -147,6 +149,23 @@ def _note_no_panel(folder, console) -> None:
     folder.record_event(None, "safety", "estop_panel_not_required", NO_PANEL_WARNING)
     if console is not None:
         console.print(f"[bold yellow]warning:[/] {NO_PANEL_WARNING}")
+
+
+def _reset_drive(link, folder, console) -> None:
+    """``--reset-drive``: reset the drive's latched fault, recorded in events and metadata; refuses the run if it cannot."""
+    from harness.runs.drive_reset import DriveResetRefused, reset_drive
+
+    try:
+        done = reset_drive(link)
+    except DriveResetRefused as err:
+        folder.metadata["drive_reset"] = {"sent": False, "refused": str(err)}
+        folder.record_event(None, "safety", "drive_reset_refused", str(err))
+        folder.finish("refused", trip_reason=str(err))
+        raise
+    folder.metadata["drive_reset"] = done.as_dict()
+    folder.record_event(None, "safety", "drive_reset" if done.sent else "drive_reset_not_needed", done.summary())
+    if console is not None:
+        console.print(done.summary(), highlight=False)
 
 
 def _check_host_timing(profile: Profile, settings: SessionSettings, link, folder, report) -> HostTiming:
@@ -243,6 +262,8 @@ def run_session(
             table_link.attach(link)
         if on_link is not None:
             on_link(link)
+        if settings.reset_drive:
+            _reset_drive(link, folder, console)
         host_timing = None if settings.lockstep else _check_host_timing(profile, settings, link, folder, on_host_timing)
         lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None
         status = LoopStatus()
@@ -259,9 +280,15 @@ def run_session(
             try:
                 result = loop.run()
             except ArmTimeout as err:
-                folder.record_event(None, "fault", "arm_refused", str(err))
-                folder.finish("error", trip_reason=f"arm refused: {err.failed}")
-                raise
+                from harness.runs.drive_reset import latched_fault_note
+
+                note = latched_fault_note(link)  # say why the drive is not ready, and what resets it
+                refused = ArmTimeout(f"{err.failed}; {note}", profile.loop.arm_timeout_s) if note else err
+                folder.record_event(None, "fault", "arm_refused", str(refused))
+                folder.finish("error", trip_reason=f"arm refused: {refused.failed}")
+                if refused is err:
+                    raise
+                raise refused from err
         if table_link is not None and result.outcome != "tripped":
             table_link.stop(loop.scheduler.elapsed_s)  # the end of the run (a trip's stop is its trip action)
         bus = bus_statistics(link)

@@ -43,7 +43,7 @@ def protected(codec: MessageCodec, values: list[float], counter: int = 0) -> byt
 def test_protocol_has_the_required_messages_and_version() -> None:
     assert set(NAMES) == {
         "ESTOP", "ACTUATOR_CMD", "TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS",
-        "HEARTBEAT", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_CONTROL", "RIG_STATUS",
+        "HEARTBEAT", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_CONTROL", "RIG_STATUS", "DRIVE_RESET",
     }
     assert PROTOCOL.version == 1
     assert len(PROTOCOL.by_id) == len(NAMES)
@@ -111,6 +111,7 @@ def test_encode_rounds_to_the_grid() -> None:
         ("ACTUATOR_STATUS", [5.0, 1.0, 0.0, 0.0], "drive_state"),
         ("RIG_CONTROL", [4.0, 0.0, 0.0, 0.0], "command"),
         ("RIG_CONTROL", [1.0, 0.0, 0.0, math.inf], "fault_param"),
+        ("DRIVE_RESET", [256.0], "fault_code"),
     ],
 )
 def test_encode_refuses_out_of_range(name: str, values: list[float], bad: str) -> None:
