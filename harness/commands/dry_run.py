@@ -48,7 +48,8 @@ def add_parser(sub) -> None:
             "--time-scale 2 --records-dir ../shared/data/ground_motions\n"
             "  harness dry-run --interface socketcan --channel vcan0          (starts `harness rig` itself)\n"
             "  harness dry-run --lockstep                                      (deterministic; any machine)\n"
-            "  harness dry-run --set safety.stroke.hard_limit_m=0.02           (watch it trip)\n\n" + EPILOG
+            "  harness dry-run --lockstep --set safety.stroke.soft_limit_m=0.006 --set safety.stroke.fade_band_m=0.002 "
+            "--set safety.stroke.hard_limit_m=0.008   (watch it trip)\n\n" + EPILOG
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -65,7 +66,7 @@ def add_parser(sub) -> None:
     loop.add_argument("--external-rig", action="store_true", help="a `harness rig` already serves the channel; do not start one")
     output = parser.add_argument_group("output")
     output.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
-    output.add_argument("--quiet", action="store_true", help="no live console")
+    output.add_argument("--quiet", action="store_true", help="print the outcome line only (no live console, no tables)")
     parser.set_defaults(handler=run)
 
 
@@ -94,7 +95,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
         title += f", over the {result.span_s:.2f} s of record that ran before the run ended ({session.outcome})"
     assert result.passive is not None, "the command's dry run is compared (DryRunOptions.compare)"
     table = reduction_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run"))
-    console.print(table.to_rich())
+    console.print(table.to_rich(console.width))
     worst, difference_pct = result.largest_twin_difference()
     console.print(f"against `harness simulate --rig-effects` (the rig's models offline): largest peak difference "
                   f"{difference_pct:.1f} % ({worst})")
