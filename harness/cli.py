@@ -15,6 +15,7 @@ from rich.markup import escape
 from harness import exit_codes
 from harness.commands import COMMANDS
 from harness.commands.options import EPILOG, wrap
+from harness.commands.output import command_console
 from harness.errors import EXPECTED_ERRORS
 
 
@@ -42,7 +43,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as done:  # argparse's own exit: --help (0) or a refused option (2, message printed)
         return done.code if isinstance(done.code, int) else exit_codes.INPUT_ERROR
-    console = Console(stderr=False)
+    console = command_console(quiet=getattr(args, "quiet", False))
     if args.command is None:
         parser.print_help()
         return exit_codes.INPUT_ERROR

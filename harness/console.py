@@ -361,9 +361,14 @@ class LiveConsole:
             if self.child is not None:
                 self._stop_child()
             elif self._print_final_panel:
-                self.console.print(self)
+                self._print_panel()
         finally:
             self.status.close()
+
+    def _print_panel(self) -> None:
+        """Print the final panel here, as wide as its content needs (a captured console is far wider than that)."""
+        panel = self.__rich__()
+        self.console.print(panel, width=min(self.console.width, self.console.measure(panel).maximum))
 
     def _stop_child(self) -> None:
         """Wait for the child's last frame; kill it after the timeout; print the panel here if it died early."""
@@ -382,4 +387,4 @@ class LiveConsole:
         if code != 0:
             self.console.show_cursor(True)
             self.console.print(f"live console exited early (status {code}); the final status:", markup=False, highlight=False)
-            self.console.print(self)
+            self._print_panel()

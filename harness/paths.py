@@ -8,5 +8,7 @@ from pathlib import Path
 PROJECT_ROOT = Path(__file__).resolve().parent.parent
 #: The shipped profiles.
 PROFILE_DIR = PROJECT_ROOT / "profiles"
+#: The shipped study files of ``harness sweep``.
+STUDY_DIR = PROFILE_DIR / "studies"
 #: Where run folders go unless ``--log-dir`` says otherwise.
 LOG_DIR = PROJECT_ROOT / "logs"

@@ -53,7 +53,8 @@ def add_parser(sub) -> None:
             "--time-scale 2 --records-dir ../shared/data/ground_motions\n"
             "  harness dry-run --interface socketcan --channel vcan0          (starts `harness rig` itself)\n"
             "  harness dry-run --lockstep                                      (deterministic; any machine)\n"
-            "  harness dry-run --set safety.stroke.hard_limit_m=0.02           (watch it trip)\n\n" + EPILOG
+            "  harness dry-run --lockstep --set safety.stroke.soft_limit_m=0.006 --set safety.stroke.fade_band_m=0.002 "
+            "--set safety.stroke.hard_limit_m=0.008   (watch it trip)\n\n" + EPILOG
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -72,7 +73,7 @@ def add_parser(sub) -> None:
     loop.add_argument("--reset-drive", action="store_true", help=f"with --external-rig: {RESET_DRIVE_HELP}")
     output = parser.add_argument_group("output")
     output.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
-    output.add_argument("--quiet", action="store_true", help="no live console")
+    output.add_argument("--quiet", action="store_true", help="print the outcome line only (no live console, no tables)")
     parser.set_defaults(handler=run)
 
 
@@ -115,7 +116,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     check = table_check(session.loop.table_record)  # a table that did not play the told record: no reductions
     table = reduction_table(result.passive.peaks, result.peaks, title, labels=("passive (sim.)", "dry run"),
                             withheld=check.withheld, flagged=check.flagged)
-    console.print(table.to_rich())
+    console.print(table.to_rich(console.width))
     if check.withheld:
         console.print("against `harness simulate --rig-effects`: not compared (the twin played the told record, "
                       "the table did not)", highlight=False)

@@ -109,32 +109,60 @@ def non_empty(text: str) -> str:
     return text
 
 
-def shipped_profile(text: str) -> Path | None:
-    """The shipped profile ``text`` names, if it names one and is not an existing file itself.
+def shipped_file(text: str, folder: Path) -> Path | None:
+    """The shipped YAML file in ``folder`` that ``text`` names, if it names one and is not an existing file itself.
 
-    ``eight_story``, ``eight_story.yaml`` and ``profiles/eight_story.yaml`` all name
-    ``<package>/profiles/eight_story.yaml`` (:data:`harness.paths.PROFILE_DIR`), so a
-    shipped profile is found by its name from any folder. Any other path is left alone.
+    A name may carry ``.yaml`` and the trailing folders of ``folder`` inside the checkout:
+    for the profiles ``eight_story``, ``eight_story.yaml`` and ``profiles/eight_story.yaml``
+    all name ``<package>/profiles/eight_story.yaml``; for the studies ``ida_friction``,
+    ``studies/ida_friction.yaml`` and ``profiles/studies/ida_friction.yaml`` name
+    ``<package>/profiles/studies/ida_friction.yaml``. So a shipped file is found by its name
+    from any folder. Any other path is left alone.
 
     Parameters
     ----------
     text : str
         What the user typed.
+    folder : Path
+        A folder of the checkout (:data:`harness.paths.PROFILE_DIR`, :data:`harness.paths.STUDY_DIR`).
 
     Returns
     -------
     Path or None
-        The shipped file, or None (``text`` is an existing file, or names no shipped profile).
+        The shipped file, or None (``text`` is an existing file, or names no shipped file).
     """
-    from harness.paths import PROFILE_DIR
+    from harness.paths import PROJECT_ROOT
 
     given = Path(text).expanduser()
-    if given.is_file() or given.parent.name not in ("", PROFILE_DIR.name) or len(given.parts) > 2:
+    inside = folder.relative_to(PROJECT_ROOT).parts
+    prefixes = {inside[len(inside) - n:] for n in range(len(inside) + 1)}  # (), ("studies",), ("profiles", "studies")
+    if given.is_file() or given.parts[:-1] not in prefixes:
         return None
-    for candidate in (PROFILE_DIR / given.name, PROFILE_DIR / f"{given.name}.yaml"):
+    for candidate in (folder / given.name, folder / f"{given.name}.yaml"):
         if candidate.suffix in (".yaml", ".yml") and candidate.is_file():
             return candidate
     return None
+
+
+def shipped_profile(text: str) -> Path | None:
+    """The shipped profile ``text`` names (:func:`shipped_file` in :data:`harness.paths.PROFILE_DIR`)."""
+    from harness.paths import PROFILE_DIR
+
+    return shipped_file(text, PROFILE_DIR)
+
+
+def study_path(text: str) -> str:
+    """An argparse ``type=`` for a study: a YAML file, or the name of a shipped study (``profiles/studies/``).
+
+    Found like a profile (:func:`shipped_file`): ``ida_friction`` and
+    ``profiles/studies/ida_friction.yaml`` name the shipped study from any folder.
+    """
+    from harness.paths import STUDY_DIR
+
+    if not text.strip():
+        raise argparse.ArgumentTypeError("found an empty value, expected a study file or the name of a shipped study")
+    shipped = shipped_file(text, STUDY_DIR)
+    return str(shipped) if shipped is not None else text
 
 
 def profile_path(text: str) -> str:
@@ -159,6 +187,15 @@ def output_file(text: str) -> str:
     if not path.parent.is_dir():
         raise argparse.ArgumentTypeError(f"{text}: its directory {path.parent} does not exist, expected an existing directory")
     return text
+
+
+#: ``--json -``: the JSON document goes to standard output.
+STDOUT = "-"
+
+
+def json_file(text: str) -> str:
+    """An argparse ``type=`` for ``--json``: a file to write (:func:`output_file`), or ``-`` for standard output."""
+    return text if text == STDOUT else output_file(text)
 
 
 def output_dir(text: str) -> str:
@@ -214,7 +251,7 @@ def add_profile_argument(parser: argparse.ArgumentParser, default_help: str) -> 
 
 def add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> None:
     add_profile_argument(parser, default_help)
-    add_overrides(parser, "safety.stroke.hard_limit_m=0.05")
+    add_overrides(parser, "safety.force.max_force_N=8000")
     parser.add_argument(
         "--allow-weaker-safety", action="store_true",
         help="accept --set values that weaken the profile's own safety settings; each is recorded in metadata.json, "

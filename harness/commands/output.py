@@ -1,10 +1,88 @@
-"""Console output shared by the commands: progress, kernel compilation, loop timing, outcome."""
+"""Console output shared by the commands: the console itself, progress, kernel compilation, loop timing, outcome.
+
+Output captured to a file or a pipe is as wide as its longest line (:func:`command_console`):
+nothing is wrapped or cut at the 80 columns rich assumes when it sees no terminal. ``--quiet``
+silences the console (``Console.quiet``) except for what :func:`print_always` prints: the
+command's outcome line, its errors and its questions.
+"""
 
 from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+from harness import strict_json
+from harness.commands.options import STDOUT
+
+#: Width of a command's output when it is not a terminal (characters): no line is wrapped or cut, and
+#: tables keep every column in one block. ``$COLUMNS`` still sets it when given.
+CAPTURED_WIDTH = 10_000
+
+
+class CommandConsole(Console):
+    """The console of a command: a rich Console whose questions are asked even under ``--quiet``."""
+
+    def input(self, prompt: Any = "", **kwargs: Any) -> str:
+        with speaking(self):
+            return super().input(prompt, **kwargs)
+
+
+def command_console(stderr: bool = False, quiet: bool = False) -> Console:
+    """The console a command prints to: at the terminal's width, or :data:`CAPTURED_WIDTH` when captured.
+
+    Parameters
+    ----------
+    stderr : bool
+        Print to standard error instead of standard output.
+    quiet : bool
+        ``--quiet``: print only what :func:`print_always` prints.
+    """
+    console = CommandConsole(stderr=stderr, quiet=quiet)
+    if not console.is_terminal and "COLUMNS" not in os.environ:
+        console.width = CAPTURED_WIDTH
+    return console
+
+
+@contextmanager
+def speaking(console: Console) -> Iterator[Console]:
+    """``console`` with ``--quiet`` lifted for the block."""
+    quiet, console.quiet = console.quiet, False
+    try:
+        yield console
+    finally:
+        console.quiet = quiet
+
+
+def print_always(console: Console, *objects: Any, **kwargs: Any) -> None:
+    """Print even under ``--quiet``: the outcome line, an error, a product the command was asked for."""
+    with speaking(console):
+        console.print(*objects, **kwargs)
+
+
+def json_console(console: Console, json_path: str | None) -> Console:
+    """Where the rest of a command's output goes: ``console``, or standard error when ``--json -`` takes standard output."""
+    if json_path != STDOUT:
+        return console
+    return command_console(stderr=True, quiet=console.quiet)
+
+
+def write_json(path: str, document: Any) -> str:
+    """Write ``document`` as indented JSON to the file ``path``, or to standard output for ``-``; where it went."""
+    text = strict_json.dumps(document, indent=2) + "\n"  # NaN as null: valid JSON for every parser
+    if path == STDOUT:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+        return "standard output"
+    Path(path).write_text(text, encoding="utf-8")
+    return path
 
 
 def progress_bar(console: Console, enabled: bool):
@@ -47,6 +125,7 @@ _HOST_TIMING_ON_A_VIRTUAL_RIG = ("sensor_stale", "actuator_status_stale")
 
 
 def print_outcome(console: Console, session, virtual_rig: bool = False, weakened: tuple = ()) -> None:
+    """The outcome line (printed even under ``--quiet``, with any weakened safety setting), then its details."""
     from harness.report.table_check import table_check
     from harness.safety.operator_detectors import HOST_TIMING_REMEDIES
     from harness.safety.weakening import summary
@@ -57,7 +136,9 @@ def print_outcome(console: Console, session, virtual_rig: bool = False, weakened
         if session.record_problem else ""
     check = table_check(session.loop.table_record)  # the table against the record it was told (harness/safety/table_record.py)
     doubtful = ", [bold yellow]with a warning: the table check is marginal[/]" if check.verdict == "marginal" else ""
-    console.print(f"outcome: [{style}]{session.outcome}[/]{reason}{lost}{doubtful}; run folder {session.run_path}")
+    weakened_text = f"; [bold red]{escape(summary(weakened))}[/]" if weakened else ""
+    print_always(console, f"outcome: [{style}]{session.outcome}[/]{reason}{lost}{doubtful}; run folder "
+                 f"{escape(str(session.run_path))}{weakened_text}")
     if session.loop.trip_detail and not (check.verdict == "mismatch" and session.trip_reason == "table_record_mismatch"):
         console.print(f"  {escape(session.loop.trip_detail)}", highlight=False)  # (the check's own line says it then)
     if check.line:
@@ -72,8 +153,6 @@ def print_outcome(console: Console, session, virtual_rig: bool = False, weakened
         )
     for line in session.loop.realtime_report:
         console.print(f"  {line}")
-    if weakened:
-        console.print(f"  [bold red]{escape(summary(weakened))}[/]", highlight=False)
 
 
 def print_host_timing(console: Console):

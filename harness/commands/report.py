@@ -14,8 +14,17 @@ from harness.commands.options import (
     output_dir,
     wrap,
 )
-from harness.commands.output import progress_bar
+from harness.commands.output import print_always, progress_bar
 from harness.input_limits import NumberRange
+
+EXAMPLES = """\
+examples:
+  harness report logs/<run folder>            (the folder a dry run's or run's outcome line names)
+  harness simulate eight_story --controller FSF-I --duration 10 --out study_fsf1/
+  harness simulate eight_story --controller OF-I --duration 10 --out study_of1/
+  harness report study_fsf1/ study_of1/ --label FSF-I --label OF-I --out compare/
+      (the two simulate commands make the case sets this one compares)
+"""
 
 #: A story height for drift ratios (m): from a model building to a tall story.
 STORY_HEIGHT = NumberRange(0.0, 20.0, "m")
@@ -35,8 +44,7 @@ def add_parser(sub) -> None:
             "--out). Runs are labelled by what differs between them (controller, record, PGA, time scale, "
             "variant, --set overrides, kind); --label names them yourself."
         ),
-        epilog="examples:\n  harness report logs/2026-11-22T03-10-05_nceer_4dof_dry-run\n"
-        "  harness report study_fsf1/ study_of1/ --label FSF-I --label OF-I --out compare/\n\n" + OFFLINE_EPILOG,
+        epilog=EXAMPLES + "\n" + OFFLINE_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("runs", nargs="+", metavar="RUN", help="run folder, or a simulate --out folder of cases")
@@ -46,7 +54,7 @@ def add_parser(sub) -> None:
                         "case name); default: what differs between the runs")
     parser.add_argument("--story-height", type=number_in(STORY_HEIGHT), metavar="M",
                         help=f"story height (m): drifts are then plotted as a ratio of it (%%), {STORY_HEIGHT.describe()}")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--quiet", action="store_true", help="print the outcome line only (no progress bar, no tables)")
     parser.set_defaults(handler=run)
 
 
@@ -55,8 +63,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.report.plots import PlotOptions
 
     if args.label and len(args.label) > len(args.runs):
-        console.print(f"[bold red]error:[/] found {len(args.label)} --label for {len(args.runs)} RUN, expected at most "
-                      "one per RUN", highlight=False)
+        print_always(console, f"[bold red]error:[/] found {len(args.label)} --label for {len(args.runs)} RUN, expected "
+                     "at most one per RUN", highlight=False)
         return exit_codes.INPUT_ERROR
     with progress_bar(console, not args.quiet) as progress:
         task = progress.add_task("report", total=1.0)
@@ -69,5 +77,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     console.print(summary_text(result, width=console.width), highlight=False, markup=False, soft_wrap=True)
     for warning in result.warnings:
         console.print(f"[yellow]warning:[/] {escape(warning)}")
-    console.print(f"wrote {len(result.plots)} plots and {result.html_path}", soft_wrap=True)
+    warnings = f"; {len(result.warnings)} warning{'s' if len(result.warnings) != 1 else ''} (summary.txt)" \
+        if result.warnings else ""
+    print_always(console, f"wrote {len(result.plots)} plots and {escape(str(result.html_path))}{warnings}", soft_wrap=True)
     return exit_codes.OK

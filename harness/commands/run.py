@@ -86,7 +86,8 @@ def add_parser(sub) -> None:
     parser.add_argument("--yes", action="store_true", help="do not ask before arming")
     parser.add_argument("--reset-drive", action="store_true", help=RESET_DRIVE_HELP)
     parser.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
-    parser.add_argument("--quiet", action="store_true", help="no live console")
+    parser.add_argument("--quiet", action="store_true",
+                        help="print the outcome line only (no live console); it still asks before arming")
     parser.set_defaults(handler=run)
 
 

@@ -11,7 +11,7 @@ from typing import Any
 from rich.console import Console
 from rich.markup import escape
 
-from harness import exit_codes, strict_json
+from harness import exit_codes
 from harness.commands.options import (
     DELAY,
     RATE,
@@ -21,14 +21,14 @@ from harness.commands.options import (
     add_profile_argument,
     add_record_options,
     check_run_length,
+    json_file,
     non_empty,
     number_in,
     output_dir,
-    output_file,
     study_options,
     wrap,
 )
-from harness.commands.output import progress_bar
+from harness.commands.output import json_console, print_always, progress_bar, write_json
 
 EXAMPLES = """\
 examples:
@@ -75,11 +75,13 @@ def add_parser(sub) -> None:
         "--delay then adds sensor delay: one loop period (e.g. 0.002) mirrors a real-time dry run",
     )
     output = parser.add_argument_group("output")
-    output.add_argument("--json", type=output_file, metavar="PATH", help="write peaks and record facts as JSON (SI units)")
+    output.add_argument("--json", type=json_file, metavar="PATH",
+                        help="write peaks and record facts as JSON (SI units); '-' writes it to standard output (and the "
+                        "rest to standard error)")
     output.add_argument("--out", type=output_dir, metavar="DIR", help="save both cases' time series as run folders in DIR")
     output.add_argument("--label", type=non_empty, metavar="TEXT",
                         help="label of this study in reports (default: made from what differs between the runs compared)")
-    output.add_argument("--quiet", action="store_true", help="no progress bar")
+    output.add_argument("--quiet", action="store_true", help="print the outcome line only (no progress bar, no tables)")
     parser.set_defaults(handler=run)
 
 
@@ -94,6 +96,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.profile import load_profile
     from harness.runs.simulate_batch import split_list
 
+    console = json_console(console, args.json)
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
     check_run_length(profile, args)
     records, controllers = split_list(args.record), split_list(args.controller)
@@ -108,8 +111,9 @@ def _print_study(console: Console, result: Any) -> None:
     from harness.rig.truth import truth_summary
 
     motion = result.motion
+    variant = f" (variant [bold]{escape(result.profile.variant)}[/])" if result.profile.variant else ""
     console.print(
-        f"[bold]{result.profile.name}[/]  record [bold]{motion.name}[/]: PGA {motion.pga_g:.3f} g, "
+        f"[bold]{result.profile.name}[/]{variant}  record [bold]{motion.name}[/]: PGA {motion.pga_g:.3f} g, "
         f"PGV {motion.pgv_m_s:.3f} m/s, PGD {motion.pgd_m * 1e3:.1f} mm, time scale {motion.time_scale:g}, "
         f"{motion.duration_s:.1f} s"
     )
@@ -135,7 +139,7 @@ def _print_study(console: Console, result: Any) -> None:
     if controlled is not None and controlled.extra.get("outcome") == "tripped":
         console.print(f"[bold red]the controlled case tripped:[/] {escape(controlled.extra['trip_reason'])}")
     peaks = controlled.peaks if controlled is not None else None
-    console.print(reduction_table(result.cases["passive"].peaks, peaks, title).to_rich())
+    console.print(reduction_table(result.cases["passive"].peaks, peaks, title).to_rich(console.width))
 
 
 def run_single(args: argparse.Namespace, console: Console, profile: Any) -> int:
@@ -153,24 +157,28 @@ def run_single(args: argparse.Namespace, console: Console, profile: Any) -> int:
         result = run_study(profile, _study_options(args), report)
     _print_study(console, result)
     cost = sum(case.wall_time_s for case in result.cases.values())
-    console.print(f"simulated {len(result.cases)} x {result.motion.duration_s:.1f} s in {cost:.2f} s of wall time")
+    outcome = f"simulated {len(result.cases)} x {result.motion.duration_s:.1f} s in {cost:.2f} s of wall time"
+    controlled = result.cases.get("controlled")
+    if controlled is not None and controlled.extra.get("outcome") == "tripped":
+        outcome += f"; [bold red]the controlled case tripped[/] ({escape(controlled.extra['trip_reason'])})"
     if args.json:
-        result.write_json(args.json)
-        console.print(f"wrote {args.json}")
+        outcome += f"; wrote {escape(write_json(args.json, result.to_json()))}"
     if args.out:
         from harness.runs.simulate_output import write_study_folders
 
         folder = write_study_folders(result, args.out, args.label, args.overrides)
-        console.print(f"wrote time series to {folder}")
+        outcome += f"; wrote time series to {escape(str(folder))}"
+    print_always(console, outcome, highlight=False, soft_wrap=True)
     return exit_codes.OK
 
 
 def run_batch_command(args: argparse.Namespace, console: Console, profile: Any, records: list, controllers: list) -> int:
     """Every record with every controller: a line per study, the summary tables, and the files asked for."""
+    from harness.report.tables import in_console_wording
     from harness.runs.simulate_batch import record_name, run_batch
 
     if "none" in controllers:
-        console.print("[bold red]error:[/] 'none' cannot be part of a list of controllers (every study has its "
+        print_always(console, "[bold red]error:[/] 'none' cannot be part of a list of controllers (every study has its "
                       "passive case); expected designs of the profile", highlight=False)
         return exit_codes.INPUT_ERROR
 
@@ -187,12 +195,14 @@ def run_batch_command(args: argparse.Namespace, console: Console, profile: Any, 
         batch = run_batch(profile, _study_options(args), records, controllers, args.out, args.label, args.overrides, done)
     for table in batch.tables:
         console.print()
-        console.print(table.to_text(console.width), highlight=False, markup=False, soft_wrap=True)
+        console.print(in_console_wording(table).to_rich(console.width))
+    cost = sum(case.wall_time_s for study in batch.studies for case in study.cases.values())
+    outcome = (f"simulated {len(batch.studies)} studies ({len(records)} record{'s' if len(records) != 1 else ''} x "
+               f"{len(controllers)} controller{'s' if len(controllers) != 1 else ''}) in {cost:.2f} s of wall time")
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as handle:
-            handle.write(strict_json.dumps({"runs": [study.to_json() for study in batch.studies]}, indent=2) + "\n")
-        console.print(f"wrote {args.json}")
+        outcome += f"; wrote {escape(write_json(args.json, {'runs': [study.to_json() for study in batch.studies]}))}"
     if args.out:
-        console.print(f"wrote {len(batch.folders)} case sets and the summary tables (summary_peaks.csv, "
-                      f"summary_reduction.csv, summary.txt) to {args.out}", soft_wrap=True)
+        outcome += (f"; wrote {len(batch.folders)} case sets and the summary tables (summary_peaks.csv, "
+                    f"summary_reduction.csv, summary.txt) to {escape(str(args.out))}")
+    print_always(console, outcome, highlight=False, soft_wrap=True)
     return exit_codes.OK

@@ -19,11 +19,12 @@ from rich.progress import (
     TimeElapsedColumn,
     TimeRemainingColumn,
 )
-from rich.table import Table as RichTable
 from rich.text import Text
 
 from harness import exit_codes
-from harness.commands.options import non_empty, output_dir, wrap
+from harness.commands.options import non_empty, output_dir, study_path, wrap
+from harness.commands.output import print_always
+from harness.report.text_table import TextTable
 
 if TYPE_CHECKING:
     from harness.profile import Profile
@@ -45,7 +46,8 @@ A rerun of the same study into the same --out folder skips the cases already the
 (each case is keyed by a hash of its resolved inputs); a study extended with more
 levels or samples runs only the new cases. Results: --out/cases.parquet (and
 cases.csv), one row per case: inputs, every peak, % reductions, outcome, error,
-wall time. Study files: profiles/studies/ and README, "Studies at scale".
+wall time. Study files: profiles/studies/ and README, "Studies at scale"; a shipped
+study is found by its name (ida_friction) or as profiles/studies/NAME.yaml from any folder.
 
 records: names in a study (el_centro, hachinohe, pacoima, synthetic:SEED) are looked up
 in --records-dir, else the study's options.records_dir, else $HARNESS_RECORDS_DIR, else
@@ -72,7 +74,9 @@ def add_parser(sub) -> None:
         epilog=EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("study", nargs="?", help="study file (YAML; see profiles/studies/)")
+    parser.add_argument("study", nargs="?", type=study_path, metavar="STUDY",
+                        help="study file (YAML), or the name of a shipped study (ida_friction, robustness_table2), "
+                        "found from any folder")
     parser.add_argument("--summarize", type=non_empty, metavar="RESULTS", help="report on a results folder instead of running")
     parser.add_argument("--out", type=output_dir, metavar="DIR", help="results folder (default: logs/sweeps/<study name>)")
     parser.add_argument("--report", type=output_dir, metavar="DIR", help="write summary tables, IDA and fragility curves here")
@@ -118,10 +122,10 @@ def run(args: argparse.Namespace, console: Console) -> int:
     if args.summarize:
         return _summarize(Path(args.summarize), Path(args.report) if args.report else None, console)
     if not args.study:
-        console.print("[bold red]error:[/] give a study file, or --summarize RESULTS (see harness sweep --help)")
+        print_always(console, "[bold red]error:[/] give a study file, or --summarize RESULTS (see harness sweep --help)")
         return exit_codes.INPUT_ERROR
     if args.scheduler and args.local_cluster:
-        console.print("[bold red]error:[/] --scheduler and --local-cluster: expected one Dask cluster, not both")
+        print_always(console, "[bold red]error:[/] --scheduler and --local-cluster: expected one Dask cluster, not both")
         return exit_codes.INPUT_ERROR
     return _sweep(args, console)
 
@@ -175,9 +179,9 @@ def _plan(args: argparse.Namespace, console: Console, study, folder: Path) -> in
 def _show_case(cases, base, prefix: str, console: Console) -> int:
     found = [case for case in cases if case.key.startswith(prefix)]
     if len(found) != 1:
-        console.print(f"[bold red]error:[/] {len(found)} cases have a key starting with {prefix!r}; expected one")
+        print_always(console, f"[bold red]error:[/] {len(found)} cases have a key starting with {prefix!r}; expected one")
         return exit_codes.INPUT_ERROR
-    console.print(shlex.join(["harness", *found[0].simulate_argv(base)]), highlight=False, soft_wrap=True)
+    print_always(console, shlex.join(["harness", *found[0].simulate_argv(base)]), highlight=False, soft_wrap=True, markup=False)
     return exit_codes.OK
 
 
@@ -188,10 +192,14 @@ def _run_cases(args: argparse.Namespace, console: Console, study, cases, folder:
     base = _base(study)
     with open_folder(folder, study) as store:
         todo = plan(cases, store, args.retry_failed)
-        console.print(f"[bold]{study.name}[/]: {len(cases)} cases, {todo.skipped} already in {folder}, "
-                      f"{len(todo.todo)} to run; results as {store.format}"
-                      + ("" if store.parquet else " (pyarrow is not installed: pip install pyarrow for Parquet)"))
-        if not todo.todo:
+        plan_line = (f"[bold]{study.name}[/]: {len(cases)} cases, {todo.skipped} already in {folder}, "
+                     f"{len(todo.todo)} to run; results as {store.format}"
+                     + ("" if store.parquet else " (pyarrow is not installed: pip install pyarrow for Parquet)"))
+        if args.plan:  # the count is what --plan asks for
+            print_always(console, plan_line)
+        else:
+            console.print(plan_line)
+        if args.plan or not todo.todo:
             return _finish(args, console, folder, store, None)
         runner = CaseRunner(base, simulate_case)
         engine = _engine(args, console, runner)
@@ -276,9 +284,16 @@ def _print_outcome(console: Console, outcome, engine: str) -> None:
 
 
 def _finish(args: argparse.Namespace, console: Console, folder: Path, store, outcome) -> int:
+    """Where the results are (the outcome line, unless a report follows), and the report if asked."""
+    report = bool(args.report) and (folder / "sweep.json").is_file()
     if outcome is not None or (folder / "sweep.json").is_file():
-        console.print(f"results: {folder}/cases.{store.format}" + (", cases.csv" if store.parquet else ""))
-    if args.report and (folder / "sweep.json").is_file():
+        failed = f"; {outcome.failed} cases failed" if outcome is not None and outcome.failed else ""
+        results = f"results: {folder}/cases.{store.format}" + (", cases.csv" if store.parquet else "") + failed
+        if report or args.plan:
+            console.print(results)
+        else:
+            print_always(console, results)
+    if report:
         return _summarize(folder, Path(args.report), console)
     return exit_codes.OK
 
@@ -288,16 +303,17 @@ def _summarize(results: Path, report: Path | None, console: Console) -> int:
     from harness.sweep.store import ResultStore
 
     if not (results / "sweep.json").is_file():
-        console.print(f"[bold red]error:[/] {results} holds no sweep (no sweep.json); expected a results folder of harness sweep")
+        print_always(console, f"[bold red]error:[/] {results} holds no sweep (no sweep.json); expected a results folder "
+                     "of harness sweep")
         return exit_codes.INPUT_ERROR
     columns = ResultStore(results).columns()
     if not columns:
-        console.print(f"[yellow]{results} holds no case yet[/]")
+        print_always(console, f"[yellow]{results} holds no case yet[/]")
         return exit_codes.OK
     files, tables = write_report(columns, load_settings(results), report or results / "report")
     for table in tables:
-        console.print(_rich(table))
-    console.print("wrote " + ", ".join(str(path) for path in files))
+        console.print(_text_table(table).to_rich(console.width))
+    print_always(console, "wrote " + ", ".join(str(path) for path in files), highlight=False, soft_wrap=True)
     return exit_codes.OK
 
 
@@ -305,18 +321,27 @@ def _summarize(results: Path, report: Path | None, console: Console) -> int:
 CONSOLE_ROWS = 15
 
 
-def _rich(table: Table) -> RichTable:
+#: The summary tables' columns of text (the rest are numbers).
+TEXT_COLUMNS = ("design", "record")
+
+
+def _text_table(table: Table) -> TextTable:
+    """A summary table for the console: at most :data:`CONSOLE_ROWS` rows, numbers to 3 significant figures.
+
+    Rendered with :meth:`TextTable.to_rich`, its columns wrap their headings and split into
+    blocks that repeat the design (and record) rather than cutting a cell.
+    """
+    from harness.sweep.summary import ALL
+
     rows = table.rows
     note = ""
     if len(rows) > CONSOLE_ROWS and "record" in table.header:
         at = table.header.index("record")
-        rows = [row for row in rows if row[at] == "all"]
+        rows = [row for row in rows if row[at] == ALL]
         note = " (over all records; per record in summary.csv)"
-    shown = RichTable(title=table.title + note, title_justify="left")
-    for name in table.header:
-        left = name in ("design", "record")
-        shown.add_column(name.replace(" ", "\n").replace("_", " "), justify="left" if left else "right",
-                         min_width=12 if left else None)
-    for row in rows:
-        shown.add_row(*table.cells(row))
-    return shown
+    keys = 0
+    while keys < len(table.header) and table.header[keys] in TEXT_COLUMNS:
+        keys += 1
+    return TextTable(table.title + note, tuple(name.replace("_", " ") for name in table.header),
+                     tuple(tuple(table.cells(row)) for row in rows), key_columns=max(keys, 1),
+                     numeric=tuple(name not in TEXT_COLUMNS for name in table.header))

@@ -1,10 +1,11 @@
 """A run's events and interlocks as tables: what happened when, and how long each safety check acted.
 
 :func:`events_table` lists ``events.jsonl`` in time order, folding repeats of one interlock
-into one row with a count and the first and last time. An interlock event carries no detail
-of its own (the supervisor records only its rising edge, allocating nothing in the tick), so
-the row says what the check does (:data:`harness.safety.SAFETY_TABLE`) and what the signals
-held at that tick: the controller's force, the supervised command and the stroke.
+into one row with a count and the first and last time. The force clamp's and the rate limit's
+events say the demanded value and the limit; an interlock event with no detail of its own
+(the stroke fade, the stopping ramp, runs recorded before those had one) gets what the check
+does (:data:`harness.safety.SAFETY_TABLE`) and what the signals held at that tick: the
+controller's force, the supervised command and the stroke.
 :func:`interlocks_table` counts, from the ``interlock_flags`` column, the ticks and the time
 each check acted.
 """

@@ -19,8 +19,7 @@ import io
 from dataclasses import dataclass, replace
 from html import escape
 
-from rich import box
-from rich.table import Table
+from rich.console import Group
 
 from harness.report.text_table import TextTable
 
@@ -115,17 +114,13 @@ class PeakTable:
         """Label, unit, then every formatted cell of ``row``."""
         return [row.label, row.unit, *(self.cell_text(row, i) for i in range(len(self.columns)))]
 
-    def to_rich(self) -> Table:
-        """A rich :class:`~rich.table.Table` for the console (the note as its caption)."""
-        table = Table(title=self.title, title_justify="left", caption=self.note or None, caption_justify="left",
-                      box=box.SIMPLE_HEAVY, pad_edge=False)  # no vertical rules: it fits an 80-column terminal
-        table.add_column(self.headings[0], style="bold", no_wrap=True)
-        table.add_column(self.headings[1])
-        for heading in self.columns:
-            table.add_column(heading, justify="right")
-        for row in self.rows:
-            table.add_row(*self.cells(row))
-        return table
+    def to_rich(self, width: int | None = None) -> Group:
+        """Rich tables for the console, no wider than ``width`` columns (the note as the last one's caption).
+
+        Value columns that do not fit go to further tables, each repeating the quantity and
+        unit; a cell wraps rather than being cut (:meth:`TextTable.to_rich`).
+        """
+        return self.text_table().to_rich(width)
 
     def text_table(self) -> TextTable:
         """The formatted cells as a :class:`~harness.report.text_table.TextTable` (quantity and unit are its keys)."""

@@ -22,6 +22,7 @@ from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend, peak_of, record_time, small_runs
 from harness.report.plots_control import grouped_height, title_panel, usable_groups
 from harness.report.record_groups import RecordGroup
+from harness.report.reference import passive_reference
 from harness.rowlayout import drift
 
 
@@ -32,26 +33,38 @@ def drift_height_px(n_stories: int, n_records: int = 1) -> int:
     return 150 * n_stories * n_records + 40 * n_records + 90
 
 
+#: How the simulated passive reference of a dry run is drawn beside the run (its own colour, dashed).
+REFERENCE_LINE = "--"
+
+
 def peak_profile_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
-    """Peak drift per story and peak absolute acceleration per floor (m/s^2, floor 0 = base mat) over height."""
+    """Peak drift per story and peak absolute acceleration per floor (m/s^2, floor 0 = base mat) over height.
+
+    A dry run's simulated passive reference (the one its console and tables compare it with)
+    is drawn beside it, dashed in the run's colour.
+    """
     stories = max((run.n_stories for run in runs), default=0)
     if stories == 0:
         return None
     scale, unit = options.drift_scale()
     profiles = []
     for run, colour in zip(runs, colours(runs), strict=True):
-        peaks = run_peaks(run)
-        accelerations = np.array((peaks.base_acceleration_m_s2, *peaks.floor_acceleration_m_s2))
-        profiles.append((run, colour, np.array(peaks.drift_m) * scale, accelerations))
-    logarithmic = bool(small_runs([float(np.nanmax(p[2], initial=0.0)) for p in profiles]))
+        named = [(run_peaks(run), run.label, "-")]
+        reference = passive_reference(run)
+        if reference is not None:
+            named.append((reference, f"passive (sim.): {run.label}", REFERENCE_LINE))
+        for peaks, label, line in named:
+            accelerations = np.array((peaks.base_acceleration_m_s2, *peaks.floor_acceleration_m_s2))
+            profiles.append((label, colour, line, np.array(peaks.drift_m) * scale, accelerations))
+    logarithmic = bool(small_runs([float(np.nanmax(p[3], initial=0.0)) for p in profiles]))
     with matplotlib.rc_context(style()):
         fig = figure(520)
         left, right = fig.subplots(1, 2)
-        for run, colour, drifts, accelerations in profiles:
+        for label, colour, line, drifts, accelerations in profiles:
             if drifts.size == stories and np.isfinite(drifts).all():
-                left.plot(drifts, range(1, stories + 1), "o-", color=colour, label=run.label)
+                left.plot(drifts, range(1, stories + 1), "o" + line, color=colour, label=label)
             if accelerations.size == stories + 1 and np.isfinite(accelerations).all():
-                right.plot(accelerations, range(0, stories + 1), "s-", color=colour, label=run.label)
+                right.plot(accelerations, range(0, stories + 1), "s" + line, color=colour, label=label)
         left.set(xlabel=f"Peak interstory {unit}", ylabel="Story", title="Peak drift per story")
         left.set_yticks(range(1, stories + 1))
         right.set(xlabel="Peak absolute acceleration (m/s²)", ylabel="Floor (0 = base mat)")

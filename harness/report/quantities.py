@@ -80,16 +80,19 @@ class Wording:
     acceleration_unit: str
 
 
+#: The unit of every acceleration in every table, console and files alike.
+ACCELERATION_UNIT = "m/s²"
+
 #: The report's tables (text, HTML, CSV).
 REPORT_WORDING = Wording(
     "Quantity", "Unit", "Story {j} drift", "Floor {j} abs. acceleration", "Base mat abs. acceleration",
-    "Sliding displacement x_b", "Control force / weight", "%", "m/s^2",
+    "Sliding displacement x_b", "Control force / weight", "%", ACCELERATION_UNIT,
 )
 
-#: The console tables of ``harness simulate`` and ``harness dry-run``.
+#: The console tables of ``harness simulate`` (one study or a batch) and ``harness dry-run``.
 CONSOLE_WORDING = Wording(
     "response", "unit", "story {j} drift", "floor {j} abs. acceleration", "base mat acceleration",
-    "sliding displacement x_b", "peak force", "% weight", "m/s²",
+    "sliding displacement x_b", "peak force", "% weight", ACCELERATION_UNIT,
 )
 
 

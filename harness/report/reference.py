@@ -55,6 +55,12 @@ def _span_note(reference: Mapping[str, Any]) -> str:
     return f"Simulated over the {span:.2f} s of record the run covered before it ended. " if span else ""
 
 
+def passive_reference(run: RunData) -> Peaks | None:
+    """The peaks of the simulated passive reference a dry run was compared with; None for other runs."""
+    reference = run.metadata.get(REFERENCE_KEY)
+    return _peaks(reference.get("passive_peaks")) if isinstance(reference, Mapping) else None
+
+
 def reference_tables(runs: Sequence[RunData]) -> list[PeakTable]:
     """For each run holding a ``reference`` entry: against its passive reference, and against its rig twin."""
     tables = []

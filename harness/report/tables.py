@@ -18,6 +18,7 @@ Reductions are computed from the SI peaks, differences from the displayed values
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
 from harness.peaks import Peaks, force_column, run_peaks
@@ -87,6 +88,28 @@ def reduction_table(
     columns = (*labels, heading)
     return PeakTable(title, _headings(CONSOLE_WORDING), columns, rows, (None, None, PERCENT_DIGITS), note,
                      reduction_columns=(2,))
+
+
+def in_console_wording(table: PeakTable) -> PeakTable:
+    """``table`` (built in the report's wording, e.g. a batch's) with the console's headings, labels and units.
+
+    A row keeps its numbers; its label and unit become the console's for the same quantity
+    (:data:`CONSOLE_WORDING`), except a unit the row does not share with its quantity (a
+    percent reduction stays in %).
+    """
+    stories = max((int(row.key[len("drift_"):]) for row in table.rows
+                   if row.key.startswith("drift_") and row.key[len("drift_"):].isdigit()), default=0)
+    report = {q.key: q for q in response_quantities(stories, REPORT_WORDING)}
+    console = {q.key: q for q in response_quantities(stories, CONSOLE_WORDING)}
+    rows = []
+    for row in table.rows:
+        source, target = report.get(row.key), console.get(row.key)
+        if source is None or target is None:
+            rows.append(row)
+            continue
+        unit = target.unit if row.unit == source.unit else row.unit
+        rows.append(dataclasses.replace(row, label=target.label, unit=unit))
+    return dataclasses.replace(table, headings=_headings(CONSOLE_WORDING), rows=tuple(rows))
 
 
 def _stories(runs: Sequence[RunData]) -> int:

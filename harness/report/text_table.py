@@ -4,9 +4,10 @@
 longer than the width it is given: headings wrap onto several lines within their column, a
 long text column (an event's detail) wraps within its cells, and when the value columns still
 do not fit they are split into blocks, each repeating the leading key columns (the quantity
-and its unit), so no column ever lands on a line of its own. The peak tables
-(:class:`~harness.report.peak_table.PeakTable`) and the report's context tables render
-through it.
+and its unit), so no column ever lands on a line of its own. :meth:`TextTable.to_rich` renders
+the same blocks as rich tables for the console: a cell is never cut to an ellipsis, it
+wraps. The peak tables (:class:`~harness.report.peak_table.PeakTable`), the report's
+context tables and the sweep's summary tables render through it.
 """
 
 from __future__ import annotations
@@ -18,6 +19,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from html import escape
 
+from rich import box
+from rich.console import Group
+from rich.table import Table
+from rich.text import Text
+
 #: Width a heading may take before it wraps, unless its column's cells are wider (characters).
 HEADING_WIDTH = 12
 #: Narrowest a wrapped text column gets (characters).
@@ -26,6 +32,9 @@ MIN_TEXT_WIDTH = 24
 GAP = "  "
 #: Width of the plain text when none is given (summary.txt): wide enough for any peak table.
 UNLIMITED = 10_000
+#: What a column adds to a rich table's width besides its cells: one space of padding on each
+#: side and one of the (blank) rule between columns; the table's edges give back the last one.
+RICH_GAP = 3
 
 
 @dataclass(frozen=True)
@@ -86,6 +95,35 @@ class TextTable:
             lines += textwrap.wrap(self.note, limit)
         return "\n".join(lines)
 
+    def to_rich(self, width: int | None = None) -> Group:
+        """Rich tables for the console, each no wider than ``width`` columns (None: one table, any width).
+
+        Headings stay on one line when the whole table fits; otherwise they wrap within their
+        columns and the value columns that still do not fit go to further tables, each
+        repeating the key columns, as in :meth:`to_text`. Every cell wraps rather than being
+        cut: no figure is ever lost to an ellipsis.
+        """
+        limit = (width or UNLIMITED) + 1  # the edges give back one column (RICH_GAP)
+        numeric = self._numeric()
+        widths = self._widths(wrap_headings=False)
+        if sum(widths) + RICH_GAP * len(widths) > limit:
+            widths = _fit_text_column(self._widths(wrap_headings=True), numeric, self.key_columns, limit, RICH_GAP)
+        blocks = _blocks(widths, self.key_columns, limit, RICH_GAP)
+        tables = []
+        for number, block in enumerate(blocks):
+            last = number == len(blocks) - 1
+            table = Table(title=Text(self.title) if number == 0 else None, title_justify="left",
+                          caption=Text(self.note) if last and self.note else None, caption_justify="left",
+                          box=box.SIMPLE_HEAVY, pad_edge=False)
+            for i in block:
+                heading = "\n".join(textwrap.wrap(self.headings[i], widths[i])) or self.headings[i]
+                table.add_column(Text(heading), justify="right" if numeric[i] else "left", overflow="fold",
+                                 style="bold" if i == 0 else None)
+            for row in self.rows:
+                table.add_row(*(Text(row[i]) for i in block))
+            tables.append(table)
+        return Group(*tables)
+
     def _block_lines(self, columns: list[int], widths: list[int]) -> list[str]:
         numeric = self._numeric()
         heading_lines = [textwrap.wrap(self.headings[i], widths[i]) or [""] for i in columns]
@@ -128,9 +166,9 @@ def _line(cells: Sequence[str], widths: Sequence[int], numeric: Sequence[bool]) 
     return text.rstrip()
 
 
-def _fit_text_column(widths: list[int], numeric: tuple[bool, ...], keys: int, limit: int) -> list[int]:
+def _fit_text_column(widths: list[int], numeric: tuple[bool, ...], keys: int, limit: int, gap: int = len(GAP)) -> list[int]:
     """Narrow the widest left-aligned column after the keys (a free-text column) until a block fits."""
-    total = sum(widths) + len(GAP) * (len(widths) - 1)
+    total = sum(widths) + gap * (len(widths) - 1)
     text_columns = [i for i in range(keys, len(widths)) if not numeric[i]]
     if total <= limit or not text_columns:
         return widths
@@ -140,16 +178,19 @@ def _fit_text_column(widths: list[int], numeric: tuple[bool, ...], keys: int, li
     return fitted
 
 
-def _blocks(widths: list[int], keys: int, limit: int) -> list[list[int]]:
-    """Column indices of each block: the key columns, then as many value columns as fit in ``limit``."""
+def _blocks(widths: list[int], keys: int, limit: int, gap: int = len(GAP)) -> list[list[int]]:
+    """Column indices of each block: the key columns, then as many value columns as fit in ``limit``.
+
+    ``gap`` is what each column adds besides its cells (the space between two columns).
+    """
     key_columns = list(range(min(keys, len(widths))))
-    base = sum(widths[i] for i in key_columns) + len(GAP) * len(key_columns)
+    base = sum(widths[i] for i in key_columns) + gap * len(key_columns)
     blocks: list[list[int]] = []
     current: list[int] = []
     used = base
     for i in range(len(key_columns), len(widths)):
-        needed = widths[i] + len(GAP)
-        if current and used + needed - len(GAP) > limit:
+        needed = widths[i] + gap
+        if current and used + needed - gap > limit:
             blocks.append(key_columns + current)
             current, used = [], base
         current.append(i)

@@ -57,6 +57,13 @@ class StrokeSoftFade:
         self.acted = True
         return force_N * factor
 
+    def detail(self, demand_N: float, x_b_m: float) -> str:
+        """What it faded: the stroke against the soft limit, the demanded force and what is left (built on an event only)."""
+        return (
+            f"x_b = {x_b_m:.6g} m beyond the soft limit +/-{self.soft_m:g} m (safety.stroke.soft_limit_m): outward "
+            f"force {demand_N:.6g} N faded to {demand_N * self.scale(x_b_m):.6g} N"
+        )
+
 
 class StrokeHardLimit:
     """Trip at the hard stroke limit.
@@ -155,6 +162,10 @@ class ForceClamp:
         self.acted = False
         return force_N
 
+    def detail(self, demand_N: float) -> str:
+        """What it clamped: the demanded force against the limit (built only on an event, its rising edge)."""
+        return f"demanded {demand_N:.6g} N, clamped to +/-{self.max_N:g} N (safety.force.max_force_N)"
+
 
 class ForceRateLimit:
     """Clamp the change of force per tick.
@@ -187,4 +198,11 @@ class ForceRateLimit:
             return previous_N - step
         self.acted = False
         return force_N
+
+    def detail(self, demand_N: float, previous_N: float, dt: float) -> str:
+        """What it limited: the demanded rate against the limit (built only on an event, its rising edge)."""
+        return (
+            f"demanded {(demand_N - previous_N) / dt:.6g} N/s ({previous_N:.6g} N to {demand_N:.6g} N in "
+            f"{dt * 1e3:.4g} ms), limited to +/-{self.max_rate_N_per_s:g} N/s (safety.force.max_force_rate_N_per_s)"
+        )
 

@@ -152,7 +152,7 @@ class Supervisor:
     __slots__ = (
         "config", "lifecycle", "command", "events", "act_ticks", "soft", "hard", "predictive", "clamp", "rate",
         "tracking", "_estop", "_operator_trip", "detectors", "_bits", "_slots", "_previous_N", "_ramp_gain",
-        "_last_acted", "period_s", "table_record", "stop_reason", "stop_detail",
+        "_last_acted", "period_s", "table_record", "stop_reason", "stop_detail", "_ramp_detail",
     )
 
     def __init__(self, config: SafetyConfig, period_s: float | None = None) -> None:
@@ -191,6 +191,9 @@ class Supervisor:
         self._previous_N = 0.0
         self._ramp_gain = 0.0
         self._last_acted = 0
+        #: The stopping ramp's event detail (fixed: built once here, not in a tick).
+        self._ramp_detail = (f"force ramps to zero over {config.run.stopping_ramp_s:g} s (safety.run.stopping_ramp_s), "
+                             "then the drive is disabled")
 
     # ---------------------------------------------------------------- lifecycle requests
 
@@ -317,10 +320,6 @@ class Supervisor:
         self.command.acted |= flag
         return not self._last_acted & flag
 
-    def _note_interlock(self, t: float, slot: int, flag: int, name: str) -> None:
-        if self._count(t, slot, flag, name):
-            self.events.push(t, EventKind.INTERLOCK, name, "")
-
     def _run_detectors(self, t: float, dt: float, health: TickHealth) -> bool:
         """Run every detector in order; True if one tripped."""
         bits, slots = self._bits, self._slots
@@ -349,23 +348,30 @@ class Supervisor:
                 return
 
     def _shape(self, t: float, dt: float, raw_force_N: float, x_b_m: float) -> float:
-        """Clamp, stopping ramp, rate limit, stroke fade; flags what acted."""
+        """Clamp, stopping ramp, rate limit, stroke fade; flags what acted.
+
+        Each interlock's event says its limit and the demanded value (the stopping ramp its
+        length); the text is built on the rising edge only, as a detector's is.
+        """
         state = self.lifecycle.state
         force = self.clamp.apply(raw_force_N)
-        if self.clamp.acted:
-            self._note_interlock(t, _I_CLAMP, _B_CLAMP, "force_clamp")
+        if self.clamp.acted and self._count(t, _I_CLAMP, _B_CLAMP, "force_clamp"):
+            self.events.push(t, EventKind.INTERLOCK, "force_clamp", self.clamp.detail(raw_force_N))
         if state is State.ARMED:
             force = 0.0
         elif state is State.STOPPING:
             elapsed = t - self.lifecycle.entered_s
             force *= self._ramp_gain * max(0.0, 1.0 - elapsed / self.config.run.stopping_ramp_s)
-            self._note_interlock(t, _I_RAMP, _B_RAMP, "stop_ramp")
-        force = self.rate.apply(force, self._previous_N, min(dt, self.period_s))
-        if self.rate.acted:
-            self._note_interlock(t, _I_RATE, _B_RATE, "force_rate")
-        force = self.soft.apply(force, x_b_m)
-        if self.soft.acted:
-            self._note_interlock(t, _I_SOFT, _B_SOFT, "stroke_soft")
+            if self._count(t, _I_RAMP, _B_RAMP, "stop_ramp"):
+                self.events.push(t, EventKind.INTERLOCK, "stop_ramp", self._ramp_detail)
+        demand, step_s = force, min(dt, self.period_s)
+        force = self.rate.apply(demand, self._previous_N, step_s)
+        if self.rate.acted and self._count(t, _I_RATE, _B_RATE, "force_rate"):
+            self.events.push(t, EventKind.INTERLOCK, "force_rate", self.rate.detail(demand, self._previous_N, step_s))
+        demand = force
+        force = self.soft.apply(demand, x_b_m)
+        if self.soft.acted and self._count(t, _I_SOFT, _B_SOFT, "stroke_soft"):
+            self.events.push(t, EventKind.INTERLOCK, "stroke_soft", self.soft.detail(demand, x_b_m))
         return force
 
     def update(self, t: float, dt: float, health: TickHealth, raw_force_N: float) -> SupervisedCommand:

@@ -23,7 +23,7 @@ def test_simulate_writes_the_documented_json(tmp_path, capsys):
     status, out, _ = _run(
         [
             "simulate", str(PROFILES / "eight_story.yaml"), "--duration", "4", "--controller", "OF-I",
-            "--json", str(path), "--quiet",
+            "--json", str(path),
         ],
         capsys,
     )

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import can
 import numpy as np
+import pytest
 
 from harness import exit_codes
 from harness.cli import main
@@ -35,9 +36,36 @@ def test_dry_run_writes_a_complete_run_folder(tmp_path, capsys):
     status, folder = _dry_run(tmp_path, "--duration", "2")
     out = capsys.readouterr().out
     assert status == exit_codes.OK
-    assert "peak responses" in out and "outcome: completed" in out
+    (line,) = out.strip().splitlines()  # --quiet: the outcome line only, not the tables nor the timing
+    assert line.startswith("outcome: completed") and str(folder) in line
     for name in ("profile.yaml", "metadata.json", "signals.csv", "can.log", "events.jsonl"):
         assert (folder / name).is_file(), name
+
+
+def test_the_peak_profile_plot_draws_the_dry_runs_simulated_passive_reference(tmp_path, monkeypatch, capsys):
+    from harness.report import plots_response
+    from harness.report.plot_common import PlotOptions
+
+    status, folder = _dry_run(tmp_path, "--duration", "1")
+    capsys.readouterr()
+    assert status == exit_codes.OK
+    drawn: dict[str, list] = {}
+    real_save = plots_response.save
+
+    def save(fig, name, title, out_dir):
+        for ax in fig.axes:
+            for line in ax.get_lines():
+                drawn.setdefault(line.get_label(), []).append(tuple(line.get_xdata()))
+        return real_save(fig, name, title, out_dir)
+
+    monkeypatch.setattr(plots_response, "save", save)
+    run = load_run(folder)
+    assert plots_response.peak_profile_plot([run], tmp_path, PlotOptions()) is not None
+    reference = json.loads((folder / "metadata.json").read_text())["reference"]["passive_peaks"]
+    drifts_mm, accelerations = drawn[f"passive (sim.): {run.label}"]
+    assert drifts_mm == pytest.approx([1e3 * d for d in reference["drift_m"]])
+    assert accelerations == pytest.approx([reference["base_acceleration_m_s2"], *reference["floor_acceleration_m_s2"]])
+    assert run.label in drawn  # beside the run itself
     metadata = json.loads((folder / "metadata.json").read_text())
     assert metadata["outcome"] == "completed" and metadata["kind"] == "dry-run"
     assert metadata["summary"]["bus"]["frames_received"] > 1000

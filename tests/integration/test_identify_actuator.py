@@ -32,6 +32,7 @@ def test_identify_actuator_measures_the_first_order_actuator_in_both_conditions(
     printed = capsys.readouterr().out
     assert status == exit_codes.OK, printed
     assert printed.count("outcome: completed") == 2
+    assert len(printed.strip().splitlines()) == 2  # --quiet: each condition's outcome line, nothing else
     for name in ("frf.csv", "frf_blocked.csv"):
         lines = (out / name).read_text().splitlines()
         assert lines[0] == "freq_hz,magnitude,phase_deg,coherence"

@@ -37,7 +37,7 @@ def _study(tmp_path: Path, body: str, name: str = "study.yaml") -> Path:
 
 
 def _sweep(capsys, *args: str) -> tuple[int, str]:
-    status = main(["sweep", *args, "--quiet"])
+    status = main(["sweep", *args])
     captured = capsys.readouterr()
     return status, captured.out + captured.err
 

@@ -149,7 +149,7 @@ def test_console_table_rows_labels_and_digits(pair) -> None:
     assert table.cells(table.row("floor_acceleration_1"))[1] == "m/s²"
     force_row = table.row("force_percent_weight")
     assert table.cells(force_row)[1:] == ["% weight", "0.00", f"{force_row.values[1]:.2f}", NO_REDUCTION]
-    assert table.to_rich().title == "title"
+    assert str(table.to_rich().renderables[0].title) == "title"
 
 
 def test_console_table_of_a_passive_case_alone(pair) -> None:

@@ -324,3 +324,25 @@ def test_steady_ticks_do_not_allocate() -> None:
         tracemalloc.stop()
     grown = [s for s in after.compare_to(before, "filename") if "harness/safety" in str(s.traceback) and s.size_diff > 0]
     assert sum(s.size_diff for s in grown) < 2048, grown
+
+
+def test_every_interlock_event_says_its_limit_and_the_demanded_value() -> None:
+    rig = Rig()
+    rig.tick(50_000.0)  # clamped to 10 kN and rate-limited to 400 kN/s x 4 ms = 1.6 kN
+    details = {e[2]: e[3] for e in rig.events if e[1] == "interlock"}
+    assert details["force_clamp"] == "demanded 50000 N, clamped to +/-10000 N (safety.force.max_force_N)"
+    assert details["force_rate"] == ("demanded 2.5e+06 N/s (0 N to 10000 N in 4 ms), limited to +/-400000 N/s "
+                                     "(safety.force.max_force_rate_N_per_s)")
+    for _ in range(10):
+        rig.tick(50_000.0)
+    rig.health.base_fresh = False
+    rig.health.meas.base_displacement_m = 0.055  # half the fade band beyond the 0.05 m soft limit
+    rig.tick(50_000.0)
+    details = {e[2]: e[3] for e in rig.events if e[1] == "interlock"}
+    assert details["stroke_soft"] == ("x_b = 0.055 m beyond the soft limit +/-0.05 m (safety.stroke.soft_limit_m): "
+                                      "outward force 10000 N faded to 5000 N")
+    rig.sup.stop(rig.k * DT)
+    rig.tick(0.0)
+    details = {e[2]: e[3] for e in rig.events if e[1] == "interlock"}
+    assert details["stop_ramp"].startswith("force ramps to zero over 0.5 s (safety.run.stopping_ramp_s)")
+    assert all(e[3] for e in rig.events if e[1] == "interlock")  # no interlock event has an empty detail
