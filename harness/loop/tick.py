@@ -171,7 +171,8 @@ class ControlTick:
         health.drive_fault = self.reader.drive_fault
         health.pressure_ok = self.reader.pressure_ok
         health.actuator_status_age_s = status.age(now)
-        health.measured_force_N = self.reader.measured_force_n
+        # the load cell: the supervisor's tracking check, and the actuator-aware designs' force state
+        self.meas.actuator_force_N = health.measured_force_N = self.reader.measured_force_n
         health.estop = self.reader.estop_requested
         health.estop_panel_age_s = self.reader.panel_age(now)
         health.stall_s = stall_s
