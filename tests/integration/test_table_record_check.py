@@ -24,6 +24,7 @@ from harness.cli import main
 from harness.profile import load_profile
 from harness.recording import load_run
 from harness.report import build_report
+from harness.report.peak_table import NO_REDUCTION
 from harness.runs.dry_run import serving_virtual_rig
 from harness.runs.simulate import StudyOptions, prepare_motion, resolve_profile
 from tests.conftest import REPO
@@ -45,7 +46,7 @@ def external_rig(records_dir: Path, channel: str, record: str, pga_g: float = PG
 def _dry_run(tmp_path: Path, records_dir: Path, channel: str, record: str) -> int:
     """``harness dry-run --external-rig`` on ``channel``, told ``record``."""
     return main([
-        "dry-run", "--external-rig", "--lockstep", "--interface", "virtual", "--channel", channel, "--quiet",
+        "dry-run", "--external-rig", "--lockstep", "--interface", "virtual", "--channel", channel,
         "--records-dir", str(records_dir), "--record", record, "--pga", str(PGA_G), "--time-scale", "2",
         "--duration", str(DURATION_S), "--log-dir", str(tmp_path),
     ])
@@ -124,7 +125,7 @@ def test_a_table_playing_another_record_is_stopped_and_prints_no_reductions(tmp_
     assert "outcome: stopped (table_record_mismatch)" in out
     assert "table check: MISMATCH" in out and "Reductions not shown" in out
     cells = _reduction_cells(printed)
-    assert cells == ["-", "-", "-"], out
+    assert cells == [NO_REDUCTION] * 3, out
     run = load_run(folder)
     mismatch = [e for e in run.events if e["name"] == "table_record_mismatch"]
     assert mismatch and mismatch[0]["kind"] == "fault"
@@ -150,7 +151,7 @@ def test_issue_21_steps_a_rig_process_playing_el_centro_for_a_harness_told_pacoi
     )
     try:
         status = main(["dry-run", "--external-rig", "--lockstep", "--interface", "seqpacket", "--channel", channel,
-                       "--quiet", "--record", "pacoima", "--log-dir", str(tmp_path), *record])
+                       "--record", "pacoima", "--log-dir", str(tmp_path), *record])
     finally:
         rig.send_signal(signal.SIGINT)
         rig.wait(timeout=60)
