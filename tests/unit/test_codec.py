@@ -143,13 +143,27 @@ def test_rejects_wrong_length() -> None:
     assert decoder.rejected("TABLE_SENSORS", RxStatus.WRONG_LENGTH) == 2
 
 
-@pytest.mark.parametrize("bit", range(64))
-def test_rejects_every_single_bit_flip_as_bad_crc(bit: int) -> None:
+#: Every message of drivers/rig.dbc that carries the E2E CRC (byte 0, signal ``crc``): all of them today.
+CRC_MESSAGES = sorted(m.name for m in PROTOCOL.database.messages if any(s.name == "crc" for s in m.signals))
+
+
+def test_every_message_of_the_dbc_carries_the_crc() -> None:
+    assert CRC_MESSAGES == NAMES
+
+
+@pytest.mark.parametrize("name", CRC_MESSAGES)
+@pytest.mark.parametrize("counter", [0, 7])
+def test_rejects_every_single_bit_flip_of_every_message_as_bad_crc(name: str, counter: int) -> None:
+    codec = PROTOCOL[name]
+    values = [sig.maximum if k % 2 else sig.minimum for k, sig in enumerate(codec.signals)]  # valid, bits set and clear
+    good = protected(codec, values, counter)
     decoder = Decoder(PROTOCOL)
-    frame = good_table_frame()
-    frame[bit // 8] ^= 1 << (bit % 8)
-    assert decoder.decode(0x30, frame) == RxStatus.BAD_CRC
-    assert decoder.counts[RxStatus.BAD_CRC] == 1
+    for bit in range(8 * codec.length):
+        frame = bytearray(good)
+        frame[bit // 8] ^= 1 << (bit % 8)
+        assert decoder.decode(codec.frame_id, frame) == RxStatus.BAD_CRC, f"{name}: bit {bit} flipped was not caught"
+    assert decoder.rejected(name, RxStatus.BAD_CRC) == 8 * codec.length
+    assert decoder.decode(codec.frame_id, good) == RxStatus.OK  # the unflipped frame is a good one
 
 
 def test_rejects_a_frame_of_one_message_on_another_id_via_data_id() -> None:

@@ -115,6 +115,22 @@ def test_sensor_jump_at_and_around_the_limit(channel: str, limit: float) -> None
     assert "changed by" in det.detail(health)
 
 
+@pytest.mark.parametrize(("channel", "limit"), [
+    ("table_displacement_m", SENSORS.jump_limit_m), ("base_displacement_m", SENSORS.jump_limit_m),
+    ("table_velocity_m_s", SENSORS.jump_limit_m_s), ("base_velocity_m_s", SENSORS.jump_limit_m_s),
+])
+@pytest.mark.parametrize("start", [0.0, 0.1, -0.1])
+def test_sensor_jump_catches_a_downward_jump_as_an_upward_one(channel: str, limit: float, start: float) -> None:
+    det = SensorJump(SENSORS)
+    health = _health(**{channel: start})
+    assert not det.update(0.0, DT, health)  # primes
+    setattr(health.meas, channel, start - limit * 0.999)
+    assert not det.update(DT, DT, health)  # down by just under the limit
+    setattr(health.meas, channel, start - limit * 0.999 - limit * 1.001)
+    assert det.update(2 * DT, DT, health)  # down by just over it: the first sample after the jump
+    assert det.detail(health).startswith(f"{CHANNELS[CHANNEL_ATTRS.index(channel)]} changed by -")
+
+
 def test_sensor_jump_ignores_ticks_without_a_fresh_sample_and_reset_clears_history() -> None:
     det = SensorJump(SENSORS)
     health = _health(base_displacement_m=0.0)

@@ -243,8 +243,12 @@ def test_operator_stop_ramps_and_operator_trip_overrides() -> None:
     ("actuator_status_age_s", 1.0, "actuator_status_fresh"),
     ("foreign_command", True, "no_foreign_command"),
     ("bus_off", True, "bus_ok"),
+    ("error_passive", True, "bus_ok"),
+    ("bus_gone", True, "bus_ok"),
     ("estop", True, "estop_clear"),
     ("operator_stop", True, "no_operator_request"),
+    ("operator_trip", True, "no_operator_request"),
+    ("estop_panel_age_s", 1.0, "estop_panel_live"),
 ])
 def test_arm_refused_names_the_failed_check(field: str, value: object, check: str) -> None:
     sup = Supervisor(SafetyConfig())

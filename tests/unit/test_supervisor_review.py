@@ -4,7 +4,8 @@
 - a stopping ramp that skips the force-rate limit;
 - a rate limit computed with a different ``dt`` than the tick's (and, since the stall budget,
   never more than one nominal period's worth after a stall);
-- sample ages that are negative or not finite (a clock mix-up) passing the staleness checks.
+- sample ages that are negative or not finite (a clock mix-up) passing the staleness checks,
+  the E-stop panel's age included (`estop_lost` and the `estop_panel_live` pre-arm check).
 """
 
 from __future__ import annotations
@@ -86,3 +87,18 @@ def test_a_negative_or_non_finite_age_trips_and_refuses_arming(field: str, age: 
     idle = Supervisor(SafetyConfig())
     with pytest.raises(ArmRefused):
         idle.arm(0.0, health)
+
+
+@pytest.mark.parametrize("age", [-1.8e9, -0.001, math.nan, math.inf])
+def test_a_negative_or_non_finite_panel_age_trips_estop_lost_and_refuses_arming(age: float):
+    # docs/SAFETY.md, estop_lost: a panel age that is not a finite age in 0..max_panel_age_s trips and refuses arming
+    sup, health = _running()
+    assert sup.update(0.002, 0.002, health, 100.0).force_N > 0.0  # a live panel: force flows
+    health.estop_panel_age_s = age
+    command = sup.update(0.004, 0.002, health, 100.0)
+    assert command.trip_reason == "estop_lost" and command.force_N == 0.0 and not command.enable
+    idle = Supervisor(SafetyConfig())
+    with pytest.raises(ArmRefused) as refused:
+        idle.arm(0.0, health)
+    assert [failure.split(":")[0] for failure in refused.value.failed] == ["estop_panel_live"]
+    assert idle.state is State.IDLE
