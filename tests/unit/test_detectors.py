@@ -441,6 +441,15 @@ def test_window_counter_spread_events_and_counter_going_backwards() -> None:
     assert window.update(2.9, 2)
 
 
+def test_window_counter_at_a_steady_rate_replaces_the_oldest_event_first() -> None:
+    # one event a second, max 2 in 2.5 s: from the third on, three always sit within the window
+    window = WindowCounter(max_count=2, window_s=2.5)
+    window.update(0.0, 0)
+    fired = [window.update(float(k), k) for k in range(1, 12)]
+    assert fired == [False, False] + [True] * 9  # the ring wraps several times and always drops the oldest
+    assert window.count(11.0) == 3
+
+
 @pytest.mark.parametrize(("cls", "counter", "limit_key", "window_key"), [
     (E2eRejects, "e2e_rejects", "max_e2e_rejects", "e2e_window_s"),
     (BusErrorFrames, "error_frames", "max_error_frames", "error_frame_window_s"),

@@ -102,3 +102,19 @@ def test_a_negative_or_non_finite_panel_age_trips_estop_lost_and_refuses_arming(
         idle.arm(0.0, health)
     assert [failure.split(":")[0] for failure in refused.value.failed] == ["estop_panel_live"]
     assert idle.state is State.IDLE
+
+
+@pytest.mark.parametrize(("field", "reason", "stale_s", "message"), [
+    ("estop_panel_age_s", "estop_lost", 0.25, "newest panel frame 250.0 ms old, expected 0 <= age <= 200.0 ms"),
+    ("actuator_status_age_s", "actuator_status_stale", 0.075, "actuator status age 75.000 ms, expected 0 <= age <= 50.000 ms"),
+])
+def test_a_stale_age_trip_names_the_age_and_resets_only_once_fresh_again(field, reason, stale_s, message):
+    sup, health = _running()
+    setattr(health, field, stale_s)
+    command = sup.update(0.002, 0.002, health, 100.0)
+    assert command.trip_reason == reason and message in sup.trip_detail
+    with pytest.raises(ResetRefused, match=message):
+        sup.reset(0.004, health)  # still stale: the reset is refused and says why
+    setattr(health, field, 0.001)
+    sup.reset(0.006, health)  # fresh again
+    assert sup.state is State.IDLE
