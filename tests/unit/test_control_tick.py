@@ -223,3 +223,52 @@ def test_commands_follow_the_supervisor_not_the_controller_on_every_tick(bench):
         command, sent = b.step()
         assert sent == (command.enable, pytest.approx(command.force_N, abs=1.0))
         assert abs(sent[1]) <= load_profile(None).safety.force.max_force_N
+
+
+def test_a_bus_that_cannot_be_polled_trips_bus_gone_in_the_same_tick(bench, monkeypatch):
+    from drivers.errors import BusError
+
+    b = bench()
+    b.run_until_running()
+
+    def gone(now):
+        raise BusError("interface vanished")
+
+    monkeypatch.setattr(b.tick.reader, "poll", gone)
+    b.publish()
+    command = b.tick.run(b.t, PERIOD_S, b.t)
+    assert b.tick.health.bus_gone is True
+    assert command.trip_reason == "bus_gone" and command.force_N == 0.0 and not command.enable
+
+
+def test_a_recorder_gets_one_row_per_tick_and_every_event(bench):
+    b = bench()
+    rows, events = [], []
+
+    class Recorder:
+        def record_row(self, row):
+            rows.append(row.copy())
+
+        def record_event(self, t, kind, name, detail):
+            events.append((t, kind, name, detail))
+
+    b.tick = ControlTick(b.link, b.controller, b.tick.estimator, b.supervisor, Recorder(), heartbeat_every=1)
+    b.run_until_running()
+    b.controller.raise_next = True
+    b.step()
+    assert len(rows) == b.tick.ticks == 24
+    assert [r[0] for r in rows] == pytest.approx([k * PERIOD_S for k in range(24)])  # the row starts with t
+    assert ("fault", "tick_exception") in [(kind, name) for _, kind, name, _ in events]
+    assert b.tick.last_event.endswith(events[-1][3]) and events[-1][2] in b.tick.last_event
+
+
+def test_each_failed_disable_send_is_counted(bench, monkeypatch):
+    b = bench()
+
+    def refused(*args):
+        raise OSError("ENOBUFS")
+
+    monkeypatch.setattr(b.tick.writer, "command", refused)
+    for k in range(3):
+        b.tick.send_disable(k * PERIOD_S)  # never raises
+    assert b.tick.disable_failures == 3

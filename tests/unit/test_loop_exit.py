@@ -135,3 +135,28 @@ def test_a_run_that_completes_ends_zero_and_disabled(bench) -> None:
     assert loop.run().outcome == "completed"
     _assert_force_flowed_then_zero_and_disabled(_commands(bench, wire))
     assert _last_heartbeat_state(wire) is State.DONE
+
+
+def test_a_base_exception_inside_a_tick_also_sends_the_trips_estop(bench) -> None:
+    import dataclasses
+
+    from harness.loop.tick import ControlTick
+    from harness.loop.trip_outputs import SUPERVISOR_SOURCE
+    from harness.safety.config import TripActionsConfig
+    from harness.safety.events import CHECK_NAMES
+    from harness.safety.supervisor import Supervisor
+
+    safety = dataclasses.replace(bench.supervisor.config, trip_actions=TripActionsConfig(internal=("disable", "estop")))
+    bench.supervisor = Supervisor(safety, period_s=PERIOD_S)
+    bench.tick = ControlTick(bench.link, bench.controller, bench.tick.estimator, bench.supervisor, None, heartbeat_every=1)
+    loop, wire = _loop(bench, in_tick=KeyboardInterrupt())
+    with pytest.raises(KeyboardInterrupt):
+        loop.run()
+    _commands(bench, wire)
+    estop = PROTOCOL["ESTOP"]
+    ids = [fid for fid, _ in wire.frames]
+    last_cmd = len(ids) - 1 - ids[::-1].index(CMD.frame_id)
+    after = [values for fid, values in wire.frames[last_cmd:] if fid == estop.frame_id]
+    assert [(v[estop.index("active")], v[estop.index("source")], v[estop.index("reason")]) for v in after] == [
+        (1.0, SUPERVISOR_SOURCE, CHECK_NAMES.index("tick_exception") + 1)
+    ], "the ESTOP follows the final zero, disabled command"
