@@ -272,3 +272,62 @@ def test_each_failed_disable_send_is_counted(bench, monkeypatch):
     for k in range(3):
         b.tick.send_disable(k * PERIOD_S)  # never raises
     assert b.tick.disable_failures == 3
+
+
+class _Flags:
+    """Stands in for the bus health the link reports: every flag the tick copies, set by the test."""
+
+    def __init__(self, **flags) -> None:
+        self.error_frames, self.send_failures, self.error_passive, self.bus_off = 0, 0, False, False
+        self.__dict__.update(flags)
+
+
+@pytest.mark.parametrize(("fault", "reason", "state"), [
+    ("estop", "estop", State.TRIPPED),
+    ("drive_fault", "drive_fault", State.TRIPPED),
+    ("foreign_command", "foreign_command", State.TRIPPED),
+    ("bus_off", "bus_off", State.TRIPPED),
+    ("error_passive", "bus_error_passive", State.STOPPING),  # safe_stop by default
+])
+def test_each_flag_the_drivers_report_reaches_the_supervisor_through_the_tick(bench, monkeypatch, fault, reason, state):
+    from harness.safety.events import bit
+
+    b = bench()
+    b.run_until_running()
+    reader_type = type(b.tick.reader)
+    if fault == "estop":
+        b.tick.reader.estop_requested = True  # what a valid ESTOP frame with active=1 latches
+    elif fault == "drive_fault":
+        monkeypatch.setattr(reader_type, "drive_fault", property(lambda self: True))
+    elif fault == "foreign_command":
+        monkeypatch.setattr(reader_type, "foreign_command_seen", property(lambda self: True))
+    else:
+        b.tick.bus_health = _Flags(**{fault: True})
+    command, _ = b.step()
+    assert command.state is state and command.acted & bit(reason)
+    assert (command.trip_reason == reason) if state is State.TRIPPED else not command.trip_reason
+
+
+def test_a_jump_between_two_fresh_samples_trips_through_the_tick(bench):
+    b = bench()
+    b.run_until_running()
+    b.x_b += 0.02  # 20 mm between two base-mat frames, four times jump_limit_m
+    command, sent = b.step()
+    assert command.trip_reason == "sensor_jump" and sent == (False, 0.0)
+
+
+@pytest.mark.parametrize(("every", "ticks_with_a_heartbeat"), [(1, list(range(12))), (5, [0, 5, 10])])
+def test_the_heartbeat_goes_out_on_every_nth_tick_from_the_first(every: int, ticks_with_a_heartbeat: list[int]):
+    b = Bench()
+    try:
+        b.tick = ControlTick(b.link, b.controller, b.tick.estimator, b.supervisor, None, heartbeat_every=every)
+        heartbeat = b.rig.reader.sample("HEARTBEAT")
+        seen = []
+        for k in range(12):
+            before = heartbeat.count
+            b.step()
+            if heartbeat.count > before:
+                seen.append(k)
+        assert seen == ticks_with_a_heartbeat
+    finally:
+        b.close()

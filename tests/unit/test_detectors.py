@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pytest
@@ -301,6 +302,19 @@ def test_sensor_disagree_fires_within_its_bound() -> None:
     assert fired * DT <= cross_s + SENSORS.disagree_time_s + 5 * DT
 
 
+def test_sensor_disagree_detail_names_the_pair_and_both_filtered_values() -> None:
+    det = SensorDisagree(SENSORS)
+    health = _health()
+    for k in range(200):  # the base mat stands still and says it moves at 0.3 m/s
+        health.meas.base_velocity_m_s = 0.3
+        if det.update(k * DT, DT, health):
+            break
+    detail = det.detail(health)
+    found = re.fullmatch(r"dy_b/dt filtered = (\S+) m/s, ydot_b filtered = (\S+) m/s, expected within 0.05 m/s", detail)
+    assert found, detail
+    assert abs(float(found[2]) - float(found[1])) > SENSORS.disagree_tolerance_m_s  # the two values that disagreed
+
+
 # ------------------------------------------------------------------ sensor_sign_flip
 
 #: Filters that pass their input through (tau << DT), so the sign-flip condition is the raw one.
@@ -564,6 +578,8 @@ def test_loop_stall_at_and_around_the_budget() -> None:
     detail = det.detail(TickHealth(stall_s=0.045, missed_periods=22))
     assert "45.0 ms" in detail and "22 missed periods" in detail and "20.0 ms" in detail
     assert "host" in detail and "--rate" in detail and "--lockstep" in detail  # says it is host timing and what to do
+    long = LoopStall(RunConfig(max_stall_s=0.5)).detail(TickHealth(stall_s=0.75, missed_periods=374))
+    assert long.startswith("the loop went 750.0 ms without a command (374 missed periods), expected at most 500.0 ms")
 
 
 # ------------------------------------------------------------------ the table

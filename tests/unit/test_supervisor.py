@@ -261,6 +261,16 @@ def test_arm_refused_names_the_failed_check(field: str, value: object, check: st
     assert sup.state is State.IDLE
 
 
+def test_arm_refused_says_what_was_expected_and_lists_every_failure() -> None:
+    health = TickHealth(estop=True, operator_trip=True)
+    with pytest.raises(ArmRefused) as info:
+        Supervisor(SafetyConfig()).arm(0.0, health)
+    assert str(info.value) == (
+        "arm refused: expected every pre-arm check to pass, failed: estop_clear: E-stop asserted, expected released; "
+        "no_operator_request: stop=False, trip=True pending, expected none"
+    )
+
+
 @pytest.mark.parametrize(("offset_m", "ok"), [(0.005, True), (-0.005, True), (0.0051, False), (math.nan, False)])
 def test_arm_needs_the_stroke_near_centre(offset_m: float, ok: bool) -> None:
     sup = Supervisor(SafetyConfig())
