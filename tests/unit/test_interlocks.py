@@ -7,7 +7,15 @@ import dataclasses
 import pytest
 
 from harness.errors import ProfileError
-from harness.safety.config import ForceConfig, SafetyConfig, StrokeConfig, check_config
+from harness.safety.config import (
+    ActuatorConfig,
+    ForceConfig,
+    SafetyConfig,
+    SensorConfig,
+    StrokeConfig,
+    TripActionsConfig,
+    check_config,
+)
 from harness.safety.events import Action
 from harness.safety.interlocks import (
     ForceClamp,
@@ -144,11 +152,30 @@ def _with(**groups: object) -> SafetyConfig:
         (_with(force=ForceConfig(max_force_rate_N_per_s=float("nan"))), "finite"),
         (_with(force=ForceConfig(max_force_rate_N_per_s=1000.0)), "stopping_ramp_s"),
         (_with(force=ForceConfig(tracking_tolerance_N=20_000.0)), "tracking_tolerance_N"),
+        (_with(stroke=StrokeConfig(fade_band_m=0.03)), "(0.03 m) is wider than the soft-to-hard gap (0.025 m)"),
+        (_with(sensors=SensorConfig(displacement_range_m=0.075)), "sensors.displacement_range_m (0.075 m) does not exceed"),
+        (_with(trip_actions=TripActionsConfig(stroke=("disable", "disable"))), "expected each action once"),
+        (_with(actuator=ActuatorConfig(max_status_age_s=0.0)), "actuator.max_status_age_s is 0, expected > 0"),
+        (_with(force=ForceConfig(max_force_N=-1.0)), "force.max_force_N is -1, expected > 0"),
     ],
 )
 def test_check_config_finds_each_problem(config: SafetyConfig, fragment: str) -> None:
     problems = check_config(config)
     assert any(fragment in p for p in problems), problems
+
+
+@pytest.mark.parametrize(("group", "field"), [
+    ("stroke", "stop_time_s"), ("force", "actuator_time_constant_s"), ("comms", "max_e2e_rejects"),
+    ("comms", "max_error_frames"), ("comms", "max_send_failures"),
+])
+def test_the_fields_that_may_be_zero_are_accepted_at_zero_and_refused_below(group: str, field: str) -> None:
+    def at(value: float) -> SafetyConfig:
+        config = SafetyConfig()
+        return dataclasses.replace(config, **{group: dataclasses.replace(getattr(config, group), **{field: value})})
+
+    # (a zero look-ahead fails the stall budget, a different check)
+    assert not [p for p in check_config(at(0)) if p.startswith(f"{group}.{field} is")]
+    assert check_config(at(-1)) == [f"{group}.{field} is -1, expected >= 0"]
 
 
 def test_fade_band_equal_to_the_gap_is_allowed() -> None:
