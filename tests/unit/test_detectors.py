@@ -602,3 +602,18 @@ def test_each_detector_documents_detects_bound_action_reset(cls: type) -> None:
     for word in ("Detects", "Bound", "Action", "Reset"):
         assert word in doc, f"{cls.__name__} docstring lacks {word}"
     assert cls.NAME in CHECK_NAMES
+
+
+def test_force_tracking_reset_clears_the_actuator_lag_to_zero_and_keeps_it_lagging() -> None:
+    tau, dt = 0.01, 0.002
+    det = ForceTracking(ForceConfig(actuator_time_constant_s=tau))
+    health = TickHealth(measured_force_N=0.0)
+    det.command_N = 5_000.0
+    for k in range(200):
+        det.update(k * dt, dt, health)
+    assert det.expected_N() == pytest.approx(5_000.0)
+    det.reset()
+    assert det.expected_N() == 0.0 and det.command_N == 0.0  # what a disabled actuator delivers
+    det.command_N = 5_000.0
+    det.update(1.0, dt, health)
+    assert det.expected_N() == pytest.approx(5_000.0 * dt / (tau + dt))  # lags from zero, does not jump to the command
