@@ -617,3 +617,27 @@ def test_force_tracking_reset_clears_the_actuator_lag_to_zero_and_keeps_it_laggi
     det.command_N = 5_000.0
     det.update(1.0, dt, health)
     assert det.expected_N() == pytest.approx(5_000.0 * dt / (tau + dt))  # lags from zero, does not jump to the command
+
+
+@pytest.mark.parametrize("pair", sorted(PAIRS))
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+def test_sensor_sign_flip_quiet_when_one_signal_is_small_but_of_the_same_sign(pair: str, direction: float) -> None:
+    # moving above the floor while the velocity reads half the floor, same sign: slow, not flipped
+    det = SensorSignFlip(UNFILTERED)
+    disp, vel, _ = PAIRS[pair]
+    health = _health()
+    speed = direction * SENSORS.sign_flip_floor_m_s * 2.0
+    for k in range(500):
+        setattr(health.meas, disp, speed * k * DT)
+        setattr(health.meas, vel, 0.25 * speed)
+        assert not det.update(k * DT, DT, health), k
+
+
+def test_window_counter_reset_forgets_the_counter_so_the_next_update_only_primes() -> None:
+    window = WindowCounter(max_count=2, window_s=1.0)
+    window.update(0.0, 0)
+    window.update(0.1, 2)
+    window.reset()
+    assert not window.update(0.2, 50)  # 48 counted before the reset are not events now
+    assert window.count(0.2) == 0
+    assert window.update(0.3, 53)  # three new ones within the window are

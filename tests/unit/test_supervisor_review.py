@@ -118,3 +118,10 @@ def test_a_stale_age_trip_names_the_age_and_resets_only_once_fresh_again(field, 
     setattr(health, field, 0.001)
     sup.reset(0.006, health)  # fresh again
     assert sup.state is State.IDLE
+
+
+def test_a_panel_age_exactly_on_its_bound_still_arms():
+    bound = SafetyConfig().estop.max_panel_age_s
+    idle = Supervisor(SafetyConfig())
+    idle.arm(0.0, TickHealth(estop_panel_age_s=bound))  # 0 <= age <= bound, like estop_lost
+    assert idle.state is State.ARMED
