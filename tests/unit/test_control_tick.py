@@ -331,3 +331,12 @@ def test_the_heartbeat_goes_out_on_every_nth_tick_from_the_first(every: int, tic
         assert seen == ticks_with_a_heartbeat
     finally:
         b.close()
+
+
+def test_a_stall_the_loop_reports_reaches_the_supervisor_through_the_tick(bench):
+    b = bench()
+    b.run_until_running()
+    b.publish()
+    command = b.tick.run(b.t, PERIOD_S, b.t, 0.0, 0.045, 21)  # 45 ms since the previous command
+    assert (b.tick.health.stall_s, b.tick.health.missed_periods) == (0.045, 21)
+    assert command.trip_reason == "loop_stall" and "21 missed periods" in b.supervisor.trip_detail
