@@ -1,12 +1,13 @@
 # Two commands on a fresh machine with Python 3.11 (see README):
 #   make dry-run   set up .venv and run a dry run against the virtual rig
 #   make test      set up .venv and run every test (the vcan stage through User-Mode Linux where needed)
+#   make mutation  mutation testing of the safety code (slow, not in CI; benchmarks/README.md gives the kill rate)
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup dry-run simulate test test-fast bench clean help
+.PHONY: setup dry-run simulate test test-fast bench mutation clean help
 
 help:
 	@sed -n 's/^#   /  /p' Makefile
@@ -35,5 +36,13 @@ test-fast: setup
 bench: setup
 	$(BIN)/python benchmarks/bench_simulate.py
 
+# mutmut (the "mutation" extra) mutates a copy of the tree in mutants/ and runs the safety unit tests against
+# each mutant; the report lists the kill rate and every survivor. MUTATION_JOBS: parallel mutants.
+MUTATION_JOBS ?= 2
+mutation: setup
+	$(BIN)/python -m pip install --quiet -e '.[test,cluster,mutation]'
+	$(BIN)/python -m mutmut run --max-children $(MUTATION_JOBS)
+	$(BIN)/python scripts/mutation_report.py
+
 clean:
-	rm -rf $(VENV) build *.egg-info .pytest_cache .hypothesis
+	rm -rf $(VENV) build *.egg-info .pytest_cache .hypothesis mutants

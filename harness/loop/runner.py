@@ -245,6 +245,9 @@ class ControlLoop:
             except Exception as exc:  # noqa: BLE001 - a fault in the loop itself: trip, never leave mid-run silently
                 tick.supervisor.report_exception(t, exc)
                 tick.send_disable(t)
+            except BaseException as exc:  # KeyboardInterrupt, SystemExit: latch the trip, so the final command says TRIPPED
+                tick.supervisor.report_exception(t, exc)
+                raise  # the finally below sends zero force with the drive disabled first
             state = tick.supervisor.state
             outcome = _OUTCOME_OF.get(state, "stopped")
             if outcome == "completed" and (self.signals.stop_requested or tick.supervisor.stop_reason):

@@ -144,13 +144,27 @@ def test_rejects_wrong_length() -> None:
     assert decoder.rejected("TABLE_SENSORS", RxStatus.WRONG_LENGTH) == 2
 
 
-@pytest.mark.parametrize("bit", range(64))
-def test_rejects_every_single_bit_flip_as_bad_crc(bit: int) -> None:
+#: Every message of drivers/rig.dbc that carries the E2E CRC (byte 0, signal ``crc``): all of them today.
+CRC_MESSAGES = sorted(m.name for m in PROTOCOL.database.messages if any(s.name == "crc" for s in m.signals))
+
+
+def test_every_message_of_the_dbc_carries_the_crc() -> None:
+    assert CRC_MESSAGES == NAMES
+
+
+@pytest.mark.parametrize("name", CRC_MESSAGES)
+@pytest.mark.parametrize("counter", [0, 7])
+def test_rejects_every_single_bit_flip_of_every_message_as_bad_crc(name: str, counter: int) -> None:
+    codec = PROTOCOL[name]
+    values = [sig.maximum if k % 2 else sig.minimum for k, sig in enumerate(codec.signals)]  # valid, bits set and clear
+    good = protected(codec, values, counter)
     decoder = Decoder(PROTOCOL)
-    frame = good_table_frame()
-    frame[bit // 8] ^= 1 << (bit % 8)
-    assert decoder.decode(0x30, frame) == RxStatus.BAD_CRC
-    assert decoder.counts[RxStatus.BAD_CRC] == 1
+    for bit in range(8 * codec.length):
+        frame = bytearray(good)
+        frame[bit // 8] ^= 1 << (bit % 8)
+        assert decoder.decode(codec.frame_id, frame) == RxStatus.BAD_CRC, f"{name}: bit {bit} flipped was not caught"
+    assert decoder.rejected(name, RxStatus.BAD_CRC) == 8 * codec.length
+    assert decoder.decode(codec.frame_id, good) == RxStatus.OK  # the unflipped frame is a good one
 
 
 def test_rejects_a_frame_of_one_message_on_another_id_via_data_id() -> None:
@@ -290,3 +304,35 @@ def test_named_choices_come_from_the_dbc() -> None:
 def test_out_of_range_error_names_the_right_signal_among_equal_ranges() -> None:
     with pytest.raises(ProtocolError, match=r"STORY_DRIFTS\.drift_3: 0\.07 m is outside -0\.065\.\.0\.065 m"):
         protected(PROTOCOL["STORY_DRIFTS"], [0.0, 0.01, 0.07])
+
+
+def test_each_rejection_is_counted_for_its_message_and_in_total() -> None:
+    codec = PROTOCOL["TABLE_SENSORS"]
+    decoder = Decoder(PROTOCOL)
+    out_of_range = bytearray(codec.length)
+    out_of_range[:] = ((codec.signals[0].raw_max + 1) << codec.signals[0].start).to_bytes(8, "little")
+    protect(out_of_range, 2, codec.data_ids)
+    frames = [
+        (good_table_frame(0), {}, RxStatus.OK),
+        (good_table_frame(1), {"is_data_frame": False}, RxStatus.NOT_DATA),
+        (good_table_frame(0), {}, RxStatus.REPEATED_COUNTER),
+        (good_table_frame(5), {}, RxStatus.SKIPPED_COUNTER),
+        (good_table_frame(7), {}, RxStatus.SKIPPED_COUNTER),
+        (out_of_range, {}, RxStatus.SKIPPED_COUNTER),  # counter 2 after 7
+        (good_table_frame(3), {}, RxStatus.OK),
+    ]
+    for frame, flags, expected in frames:
+        assert decoder.decode(codec.frame_id, frame, **flags) == expected
+        assert decoder.last is codec
+    protect(out_of_range, 4, codec.data_ids)
+    assert decoder.decode(codec.frame_id, out_of_range) == RxStatus.OUT_OF_RANGE
+    for status, n in ((RxStatus.NOT_DATA, 1), (RxStatus.REPEATED_COUNTER, 1), (RxStatus.SKIPPED_COUNTER, 3),
+                      (RxStatus.OUT_OF_RANGE, 1)):
+        assert (decoder.rejected("TABLE_SENSORS", status), decoder.counts[status]) == (n, n), status
+    assert decoder.accepted("TABLE_SENSORS") == 2 and decoder.rejected_total == 6
+    assert decoder.decode(0x7FF, bytes(8)) == RxStatus.UNKNOWN_ID and decoder.last is None
+
+
+def test_asking_for_a_message_the_decoder_does_not_receive_names_the_ones_it_does() -> None:
+    with pytest.raises(ProtocolError, match=r"does not receive 'ESTOP'; it receives: TABLE_SENSORS, BASE_SENSORS$"):
+        Decoder(PROTOCOL, ["TABLE_SENSORS", "BASE_SENSORS"]).values("ESTOP")

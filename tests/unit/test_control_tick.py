@@ -225,3 +225,120 @@ def test_commands_follow_the_supervisor_not_the_controller_on_every_tick(bench):
         command, sent = b.step()
         assert sent == (command.enable, pytest.approx(command.force_N, abs=1.0))
         assert abs(sent[1]) <= load_profile(None).safety.force.max_force_N
+
+
+def test_a_bus_that_cannot_be_polled_trips_bus_gone_in_the_same_tick(bench, monkeypatch):
+    from drivers.errors import BusError
+
+    b = bench()
+    b.run_until_running()
+
+    def gone(now):
+        raise BusError("interface vanished")
+
+    monkeypatch.setattr(b.tick.reader, "poll", gone)
+    b.publish()
+    command = b.tick.run(b.t, PERIOD_S, b.t)
+    assert b.tick.health.bus_gone is True
+    assert command.trip_reason == "bus_gone" and command.force_N == 0.0 and not command.enable
+
+
+def test_a_recorder_gets_one_row_per_tick_and_every_event(bench):
+    b = bench()
+    rows, events = [], []
+
+    class Recorder:
+        def record_row(self, row):
+            rows.append(row.copy())
+
+        def record_event(self, t, kind, name, detail):
+            events.append((t, kind, name, detail))
+
+    b.tick = ControlTick(b.link, b.controller, b.tick.estimator, b.supervisor, Recorder(), heartbeat_every=1)
+    b.run_until_running()
+    b.controller.raise_next = True
+    b.step()
+    assert len(rows) == b.tick.ticks == 24
+    assert [r[0] for r in rows] == pytest.approx([k * PERIOD_S for k in range(24)])  # the row starts with t
+    assert ("fault", "tick_exception") in [(kind, name) for _, kind, name, _ in events]
+    assert b.tick.last_event.endswith(events[-1][3]) and events[-1][2] in b.tick.last_event
+
+
+def test_each_failed_disable_send_is_counted(bench, monkeypatch):
+    b = bench()
+
+    def refused(*args):
+        raise OSError("ENOBUFS")
+
+    monkeypatch.setattr(b.tick.writer, "command", refused)
+    for k in range(3):
+        b.tick.send_disable(k * PERIOD_S)  # never raises
+    assert b.tick.disable_failures == 3
+
+
+class _Flags:
+    """Stands in for the bus health the link reports: every flag the tick copies, set by the test."""
+
+    def __init__(self, **flags) -> None:
+        self.error_frames, self.send_failures, self.error_passive, self.bus_off = 0, 0, False, False
+        self.__dict__.update(flags)
+
+
+@pytest.mark.parametrize(("fault", "reason", "state"), [
+    ("estop", "estop", State.TRIPPED),
+    ("drive_fault", "drive_fault", State.TRIPPED),
+    ("foreign_command", "foreign_command", State.TRIPPED),
+    ("bus_off", "bus_off", State.TRIPPED),
+    ("error_passive", "bus_error_passive", State.STOPPING),  # safe_stop by default
+])
+def test_each_flag_the_drivers_report_reaches_the_supervisor_through_the_tick(bench, monkeypatch, fault, reason, state):
+    from harness.safety.events import bit
+
+    b = bench()
+    b.run_until_running()
+    reader_type = type(b.tick.reader)
+    if fault == "estop":
+        b.tick.reader.estop_requested = True  # what a valid ESTOP frame with active=1 latches
+    elif fault == "drive_fault":
+        monkeypatch.setattr(reader_type, "drive_fault", property(lambda self: True))
+    elif fault == "foreign_command":
+        monkeypatch.setattr(reader_type, "foreign_command_seen", property(lambda self: True))
+    else:
+        b.tick.bus_health = _Flags(**{fault: True})
+    command, _ = b.step()
+    assert command.state is state and command.acted & bit(reason)
+    assert (command.trip_reason == reason) if state is State.TRIPPED else not command.trip_reason
+
+
+def test_a_jump_between_two_fresh_samples_trips_through_the_tick(bench):
+    b = bench()
+    b.run_until_running()
+    b.x_b += 0.02  # 20 mm between two base-mat frames, four times jump_limit_m
+    command, sent = b.step()
+    assert command.trip_reason == "sensor_jump" and sent == (False, 0.0)
+
+
+@pytest.mark.parametrize(("every", "ticks_with_a_heartbeat"), [(1, list(range(12))), (5, [0, 5, 10])])
+def test_the_heartbeat_goes_out_on_every_nth_tick_from_the_first(every: int, ticks_with_a_heartbeat: list[int]):
+    b = Bench()
+    try:
+        b.tick = ControlTick(b.link, b.controller, b.tick.estimator, b.supervisor, None, heartbeat_every=every)
+        heartbeat = b.rig.reader.sample("HEARTBEAT")
+        seen = []
+        for k in range(12):
+            before = heartbeat.count
+            b.step()
+            if heartbeat.count > before:
+                seen.append(k)
+        assert seen == ticks_with_a_heartbeat
+    finally:
+        b.close()
+
+
+def test_a_stall_the_loop_reports_reaches_the_supervisor_through_the_tick(bench):
+    b = bench()
+    b.run_until_running()
+    b.publish()
+    command = b.tick.run(b.t, PERIOD_S, b.t, 0.0, 0.045, 21)  # 45 ms since the previous command
+    assert (b.tick.health.stall_s, b.tick.health.missed_periods) == (0.045, 21)
+    assert command.trip_reason == "loop_stall" and "21 missed periods" in b.supervisor.trip_detail

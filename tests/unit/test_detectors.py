@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pytest
@@ -113,6 +114,22 @@ def test_sensor_jump_at_and_around_the_limit(channel: str, limit: float) -> None
     setattr(health.meas, channel, limit * 1.001)
     assert det.update(3 * DT, DT, health)  # first sample after the jump
     assert "changed by" in det.detail(health)
+
+
+@pytest.mark.parametrize(("channel", "limit"), [
+    ("table_displacement_m", SENSORS.jump_limit_m), ("base_displacement_m", SENSORS.jump_limit_m),
+    ("table_velocity_m_s", SENSORS.jump_limit_m_s), ("base_velocity_m_s", SENSORS.jump_limit_m_s),
+])
+@pytest.mark.parametrize("start", [0.0, 0.1, -0.1])
+def test_sensor_jump_catches_a_downward_jump_as_an_upward_one(channel: str, limit: float, start: float) -> None:
+    det = SensorJump(SENSORS)
+    health = _health(**{channel: start})
+    assert not det.update(0.0, DT, health)  # primes
+    setattr(health.meas, channel, start - limit * 0.999)
+    assert not det.update(DT, DT, health)  # down by just under the limit
+    setattr(health.meas, channel, start - limit * 0.999 - limit * 1.001)
+    assert det.update(2 * DT, DT, health)  # down by just over it: the first sample after the jump
+    assert det.detail(health).startswith(f"{CHANNELS[CHANNEL_ATTRS.index(channel)]} changed by -")
 
 
 def test_sensor_jump_ignores_ticks_without_a_fresh_sample_and_reset_clears_history() -> None:
@@ -285,6 +302,19 @@ def test_sensor_disagree_fires_within_its_bound() -> None:
     assert fired * DT <= cross_s + SENSORS.disagree_time_s + 5 * DT
 
 
+def test_sensor_disagree_detail_names_the_pair_and_both_filtered_values() -> None:
+    det = SensorDisagree(SENSORS)
+    health = _health()
+    for k in range(200):  # the base mat stands still and says it moves at 0.3 m/s
+        health.meas.base_velocity_m_s = 0.3
+        if det.update(k * DT, DT, health):
+            break
+    detail = det.detail(health)
+    found = re.fullmatch(r"dy_b/dt filtered = (\S+) m/s, ydot_b filtered = (\S+) m/s, expected within 0.05 m/s", detail)
+    assert found, detail
+    assert abs(float(found[2]) - float(found[1])) > SENSORS.disagree_tolerance_m_s  # the two values that disagreed
+
+
 # ------------------------------------------------------------------ sensor_sign_flip
 
 #: Filters that pass their input through (tau << DT), so the sign-flip condition is the raw one.
@@ -425,6 +455,15 @@ def test_window_counter_spread_events_and_counter_going_backwards() -> None:
     assert window.update(2.9, 2)
 
 
+def test_window_counter_at_a_steady_rate_replaces_the_oldest_event_first() -> None:
+    # one event a second, max 2 in 2.5 s: from the third on, three always sit within the window
+    window = WindowCounter(max_count=2, window_s=2.5)
+    window.update(0.0, 0)
+    fired = [window.update(float(k), k) for k in range(1, 12)]
+    assert fired == [False, False] + [True] * 9  # the ring wraps several times and always drops the oldest
+    assert window.count(11.0) == 3
+
+
 @pytest.mark.parametrize(("cls", "counter", "limit_key", "window_key"), [
     (E2eRejects, "e2e_rejects", "max_e2e_rejects", "e2e_window_s"),
     (BusErrorFrames, "error_frames", "max_error_frames", "error_frame_window_s"),
@@ -539,6 +578,8 @@ def test_loop_stall_at_and_around_the_budget() -> None:
     detail = det.detail(TickHealth(stall_s=0.045, missed_periods=22))
     assert "45.0 ms" in detail and "22 missed periods" in detail and "20.0 ms" in detail
     assert "host" in detail and "--rate" in detail and "--lockstep" in detail  # says it is host timing and what to do
+    long = LoopStall(RunConfig(max_stall_s=0.5)).detail(TickHealth(stall_s=0.75, missed_periods=374))
+    assert long.startswith("the loop went 750.0 ms without a command (374 missed periods), expected at most 500.0 ms")
 
 
 # ------------------------------------------------------------------ the table
@@ -561,3 +602,42 @@ def test_each_detector_documents_detects_bound_action_reset(cls: type) -> None:
     for word in ("Detects", "Bound", "Action", "Reset"):
         assert word in doc, f"{cls.__name__} docstring lacks {word}"
     assert cls.NAME in CHECK_NAMES
+
+
+def test_force_tracking_reset_clears_the_actuator_lag_to_zero_and_keeps_it_lagging() -> None:
+    tau, dt = 0.01, 0.002
+    det = ForceTracking(ForceConfig(actuator_time_constant_s=tau))
+    health = TickHealth(measured_force_N=0.0)
+    det.command_N = 5_000.0
+    for k in range(200):
+        det.update(k * dt, dt, health)
+    assert det.expected_N() == pytest.approx(5_000.0)
+    det.reset()
+    assert det.expected_N() == 0.0 and det.command_N == 0.0  # what a disabled actuator delivers
+    det.command_N = 5_000.0
+    det.update(1.0, dt, health)
+    assert det.expected_N() == pytest.approx(5_000.0 * dt / (tau + dt))  # lags from zero, does not jump to the command
+
+
+@pytest.mark.parametrize("pair", sorted(PAIRS))
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+def test_sensor_sign_flip_quiet_when_one_signal_is_small_but_of_the_same_sign(pair: str, direction: float) -> None:
+    # moving above the floor while the velocity reads half the floor, same sign: slow, not flipped
+    det = SensorSignFlip(UNFILTERED)
+    disp, vel, _ = PAIRS[pair]
+    health = _health()
+    speed = direction * SENSORS.sign_flip_floor_m_s * 2.0
+    for k in range(500):
+        setattr(health.meas, disp, speed * k * DT)
+        setattr(health.meas, vel, 0.25 * speed)
+        assert not det.update(k * DT, DT, health), k
+
+
+def test_window_counter_reset_forgets_the_counter_so_the_next_update_only_primes() -> None:
+    window = WindowCounter(max_count=2, window_s=1.0)
+    window.update(0.0, 0)
+    window.update(0.1, 2)
+    window.reset()
+    assert not window.update(0.2, 50)  # 48 counted before the reset are not events now
+    assert window.count(0.2) == 0
+    assert window.update(0.3, 53)  # three new ones within the window are

@@ -92,3 +92,26 @@ def test_parse_data_ids() -> None:
         parse_data_ids(" ".join(["256"] * 16), "M")
     with pytest.raises(ValueError, match="not a list of integers"):
         parse_data_ids("a " * 16, "M")
+
+
+def test_counter_zero_is_a_counter_like_any_other() -> None:
+    # only "no frame yet" (-1) accepts any counter; after a 0 the next must be 1
+    check = CounterCheck()
+    assert check.check(0) == CounterCheck.OK
+    assert check.check(5) == CounterCheck.SKIPPED
+    check.reset()
+    assert [check.check(c) for c in (15, 0)] == [CounterCheck.OK, CounterCheck.OK]  # wraps to 0
+    assert check.check(0) == CounterCheck.REPEATED
+    assert check.check(3) == CounterCheck.SKIPPED
+    assert check.last == 3
+
+
+def test_parse_data_ids_accepts_0_and_255_and_refuses_just_outside() -> None:
+    assert parse_data_ids(" ".join(["0"] * 8 + ["255"] * 8), "M") == (0,) * 8 + (255,) * 8
+    with pytest.raises(ValueError, match="value -1 is outside 0..255"):
+        parse_data_ids(" ".join(["0"] * 15 + ["-1"]), "M")
+
+
+@given(st.binary(min_size=0, max_size=16), st.integers(0, 16), st.integers(0, 16))
+def test_crc8_2f_of_a_range_equals_the_crc_of_the_slice(data: bytes, start: int, stop: int) -> None:
+    assert crc8_2f(data, start, min(stop, len(data))) == crc8_2f(data[start:stop])

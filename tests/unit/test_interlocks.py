@@ -7,7 +7,15 @@ import dataclasses
 import pytest
 
 from harness.errors import ProfileError
-from harness.safety.config import ForceConfig, SafetyConfig, StrokeConfig, check_config
+from harness.safety.config import (
+    ActuatorConfig,
+    ForceConfig,
+    SafetyConfig,
+    SensorConfig,
+    StrokeConfig,
+    TripActionsConfig,
+    check_config,
+)
 from harness.safety.events import Action
 from harness.safety.interlocks import (
     ForceClamp,
@@ -144,11 +152,30 @@ def _with(**groups: object) -> SafetyConfig:
         (_with(force=ForceConfig(max_force_rate_N_per_s=float("nan"))), "finite"),
         (_with(force=ForceConfig(max_force_rate_N_per_s=1000.0)), "stopping_ramp_s"),
         (_with(force=ForceConfig(tracking_tolerance_N=20_000.0)), "tracking_tolerance_N"),
+        (_with(stroke=StrokeConfig(fade_band_m=0.03)), "(0.03 m) is wider than the soft-to-hard gap (0.025 m)"),
+        (_with(sensors=SensorConfig(displacement_range_m=0.075)), "sensors.displacement_range_m (0.075 m) does not exceed"),
+        (_with(trip_actions=TripActionsConfig(stroke=("disable", "disable"))), "expected each action once"),
+        (_with(actuator=ActuatorConfig(max_status_age_s=0.0)), "actuator.max_status_age_s is 0, expected > 0"),
+        (_with(force=ForceConfig(max_force_N=-1.0)), "force.max_force_N is -1, expected > 0"),
     ],
 )
 def test_check_config_finds_each_problem(config: SafetyConfig, fragment: str) -> None:
     problems = check_config(config)
     assert any(fragment in p for p in problems), problems
+
+
+@pytest.mark.parametrize(("group", "field"), [
+    ("stroke", "stop_time_s"), ("force", "actuator_time_constant_s"), ("comms", "max_e2e_rejects"),
+    ("comms", "max_error_frames"), ("comms", "max_send_failures"),
+])
+def test_the_fields_that_may_be_zero_are_accepted_at_zero_and_refused_below(group: str, field: str) -> None:
+    def at(value: float) -> SafetyConfig:
+        config = SafetyConfig()
+        return dataclasses.replace(config, **{group: dataclasses.replace(getattr(config, group), **{field: value})})
+
+    # (a zero look-ahead fails the stall budget, a different check)
+    assert not [p for p in check_config(at(0)) if p.startswith(f"{group}.{field} is")]
+    assert check_config(at(-1)) == [f"{group}.{field} is -1, expected >= 0"]
 
 
 def test_fade_band_equal_to_the_gap_is_allowed() -> None:
@@ -171,3 +198,56 @@ def test_supervisor_refuses_an_inconsistent_config() -> None:
 
     with pytest.raises(ProfileError, match="soft_limit_m"):
         Supervisor(_with(stroke=StrokeConfig(soft_limit_m=0.1, hard_limit_m=0.075)))
+
+
+# ------------------------------------------------------------------ stall budget (docs/SAFETY.md, "Stall budget")
+
+#: The shipped profile's look-ahead: stop_time_s 50 ms less a 10 ms actuator lag covers 40 ms of blind time.
+LOOK_AHEAD = dataclasses.replace(
+    SafetyConfig(),
+    stroke=StrokeConfig(stop_time_s=0.05),
+    force=ForceConfig(actuator_time_constant_s=0.01),
+)
+
+
+def _blind(max_stall_s: float, max_sensor_age_s: float, actuator_time_constant_s: float = 0.01) -> SafetyConfig:
+    """LOOK_AHEAD with a stall budget, a sensor age and an actuator lag."""
+    return dataclasses.replace(
+        LOOK_AHEAD,
+        run=dataclasses.replace(LOOK_AHEAD.run, max_stall_s=max_stall_s),
+        sensors=dataclasses.replace(LOOK_AHEAD.sensors, max_sensor_age_s=max_sensor_age_s),
+        force=dataclasses.replace(LOOK_AHEAD.force, actuator_time_constant_s=actuator_time_constant_s),
+    )
+
+
+def test_stall_budget_exactly_on_the_boundary_is_accepted() -> None:
+    # 20 ms stall + 20 ms sensor age = 40 ms blind = 50 ms look-ahead - 10 ms lag: the shipped profile's numbers
+    assert check_config(_blind(0.02, 0.02)) == []
+    assert check_config(_blind(0.039, 0.001)) == []
+    assert check_config(_blind(0.001, 0.039)) == []
+
+
+@pytest.mark.parametrize(
+    ("stall_s", "age_s", "lag_s"),
+    [
+        (0.02, 0.0201, 0.01),  # the sensor age alone pushes it over: a sum without the age passes
+        (0.0201, 0.02, 0.01),  # the stall alone pushes it over
+        (0.001, 0.04, 0.01),  # a small stall budget cannot hide a sensor age that fills the look-ahead
+        (0.02, 0.02, 0.0101),  # the actuator lag eats into the look-ahead
+    ],
+)
+def test_stall_budget_beyond_the_look_ahead_is_refused(stall_s: float, age_s: float, lag_s: float) -> None:
+    problems = check_config(_blind(stall_s, age_s, lag_s))
+    assert len(problems) == 1, problems
+    assert "run.max_stall_s" in problems[0] and "sensors.max_sensor_age_s" in problems[0]
+    assert f"= {(stall_s + age_s) * 1e3:.1f} ms of blind time" in problems[0]
+
+
+def test_the_shipped_profile_sits_on_the_stall_budget_boundary_and_passes() -> None:
+    from harness.profile import load_profile
+
+    safety = load_profile(None).safety
+    blind_s = safety.run.max_stall_s + safety.sensors.max_sensor_age_s
+    cover_s = safety.stroke.stop_time_s - safety.force.actuator_time_constant_s
+    assert blind_s == pytest.approx(cover_s, abs=1e-12)
+    assert check_config(safety) == []

@@ -18,9 +18,11 @@ from harness.safety.config import SafetyConfig
 from harness.safety.weakening import (
     DIRECTIONS,
     FLAG,
+    Weakening,
     is_weaker,
     require_acknowledged,
     safety_fields,
+    summary,
     weakenings,
 )
 from tests.conftest import PROFILES, REPO
@@ -147,3 +149,27 @@ def test_the_panel_and_the_childs_command_carry_the_warning():
         command = view_command(status.path, 0.08, 0.1, 10_000.0, "title", parent_pid=1, alerts=(line,))
     assert f"--alert={line}" in command
     assert FLAG in line
+
+
+def test_each_kind_of_value_is_described_and_recorded_as_plain_data():
+    items = (
+        Weakening("safety.stroke.stop_time_s", 0.05, 0.02, "smaller"),
+        Weakening("safety.trip_actions.stroke", ("disable", "estop"), ("disable",), "fewer"),
+        Weakening("safety.force.actuator_rating_N", 12_000.0, None, "larger"),
+        Weakening("safety.estop.panel_required", True, False, "off"),
+        Weakening("safety.sensors.stuck_samples", 50, 80, "larger"),
+    )
+    assert [item.describe() for item in items] == [
+        "safety.stroke.stop_time_s 0.05 -> 0.02",
+        "safety.trip_actions.stroke [disable, estop] -> [disable]",
+        "safety.force.actuator_rating_N 12000 -> null",
+        "safety.estop.panel_required True -> False",
+        "safety.sensors.stuck_samples 50 -> 80",
+    ]
+    assert items[1].as_dict() == {"key": "safety.trip_actions.stroke", "profile_value": ["disable", "estop"],
+                                  "value": ["disable"], "direction": "fewer"}
+    assert items[2].as_dict()["value"] is None
+    assert summary(items[:2]) == (
+        "safety weakened (--allow-weaker-safety): safety.stroke.stop_time_s 0.05 -> 0.02; "
+        "safety.trip_actions.stroke [disable, estop] -> [disable]"
+    )

@@ -243,8 +243,12 @@ def test_operator_stop_ramps_and_operator_trip_overrides() -> None:
     ("actuator_status_age_s", 1.0, "actuator_status_fresh"),
     ("foreign_command", True, "no_foreign_command"),
     ("bus_off", True, "bus_ok"),
+    ("error_passive", True, "bus_ok"),
+    ("bus_gone", True, "bus_ok"),
     ("estop", True, "estop_clear"),
     ("operator_stop", True, "no_operator_request"),
+    ("operator_trip", True, "no_operator_request"),
+    ("estop_panel_age_s", 1.0, "estop_panel_live"),
 ])
 def test_arm_refused_names_the_failed_check(field: str, value: object, check: str) -> None:
     sup = Supervisor(SafetyConfig())
@@ -255,6 +259,16 @@ def test_arm_refused_names_the_failed_check(field: str, value: object, check: st
     assert [f.split(":")[0] for f in info.value.failed] == [check]
     assert check in PRE_ARM_CHECKS
     assert sup.state is State.IDLE
+
+
+def test_arm_refused_says_what_was_expected_and_lists_every_failure() -> None:
+    health = TickHealth(estop=True, operator_trip=True)
+    with pytest.raises(ArmRefused) as info:
+        Supervisor(SafetyConfig()).arm(0.0, health)
+    assert str(info.value) == (
+        "arm refused: expected every pre-arm check to pass, failed: estop_clear: E-stop asserted, expected released; "
+        "no_operator_request: stop=False, trip=True pending, expected none"
+    )
 
 
 @pytest.mark.parametrize(("offset_m", "ok"), [(0.005, True), (-0.005, True), (0.0051, False), (math.nan, False)])

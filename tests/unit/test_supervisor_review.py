@@ -4,7 +4,8 @@
 - a stopping ramp that skips the force-rate limit;
 - a rate limit computed with a different ``dt`` than the tick's (and, since the stall budget,
   never more than one nominal period's worth after a stall);
-- sample ages that are negative or not finite (a clock mix-up) passing the staleness checks.
+- sample ages that are negative or not finite (a clock mix-up) passing the staleness checks,
+  the E-stop panel's age included (`estop_lost` and the `estop_panel_live` pre-arm check).
 """
 
 from __future__ import annotations
@@ -86,3 +87,41 @@ def test_a_negative_or_non_finite_age_trips_and_refuses_arming(field: str, age: 
     idle = Supervisor(SafetyConfig())
     with pytest.raises(ArmRefused):
         idle.arm(0.0, health)
+
+
+@pytest.mark.parametrize("age", [-1.8e9, -0.001, math.nan, math.inf])
+def test_a_negative_or_non_finite_panel_age_trips_estop_lost_and_refuses_arming(age: float):
+    # docs/SAFETY.md, estop_lost: a panel age that is not a finite age in 0..max_panel_age_s trips and refuses arming
+    sup, health = _running()
+    assert sup.update(0.002, 0.002, health, 100.0).force_N > 0.0  # a live panel: force flows
+    health.estop_panel_age_s = age
+    command = sup.update(0.004, 0.002, health, 100.0)
+    assert command.trip_reason == "estop_lost" and command.force_N == 0.0 and not command.enable
+    idle = Supervisor(SafetyConfig())
+    with pytest.raises(ArmRefused) as refused:
+        idle.arm(0.0, health)
+    assert [failure.split(":")[0] for failure in refused.value.failed] == ["estop_panel_live"]
+    assert idle.state is State.IDLE
+
+
+@pytest.mark.parametrize(("field", "reason", "stale_s", "message"), [
+    ("estop_panel_age_s", "estop_lost", 0.25, "newest panel frame 250.0 ms old, expected 0 <= age <= 200.0 ms"),
+    ("actuator_status_age_s", "actuator_status_stale", 0.075, "actuator status age 75.000 ms, expected 0 <= age <= 50.000 ms"),
+])
+def test_a_stale_age_trip_names_the_age_and_resets_only_once_fresh_again(field, reason, stale_s, message):
+    sup, health = _running()
+    setattr(health, field, stale_s)
+    command = sup.update(0.002, 0.002, health, 100.0)
+    assert command.trip_reason == reason and message in sup.trip_detail
+    with pytest.raises(ResetRefused, match=message):
+        sup.reset(0.004, health)  # still stale: the reset is refused and says why
+    setattr(health, field, 0.001)
+    sup.reset(0.006, health)  # fresh again
+    assert sup.state is State.IDLE
+
+
+def test_a_panel_age_exactly_on_its_bound_still_arms():
+    bound = SafetyConfig().estop.max_panel_age_s
+    idle = Supervisor(SafetyConfig())
+    idle.arm(0.0, TickHealth(estop_panel_age_s=bound))  # 0 <= age <= bound, like estop_lost
+    assert idle.state is State.ARMED
