@@ -73,8 +73,9 @@ def test_dry_run_across_processes_over_vcan0(vcan_channel, tmp_path):
 
 
 def test_dry_run_trips_on_stroke_over_vcan0(vcan_channel, tmp_path):
+    # The force-source rig: its stroke follows the table (the servo-hydraulic one drags the base mat along).
     done = _harness("dry-run", "--interface", "socketcan", "--channel", vcan_channel, "--lockstep", "--quiet",
-                    "--duration", "6", "--log-dir", str(tmp_path), *SLOW_HOST,
+                    "--duration", "6", "--log-dir", str(tmp_path), "--variant", "force_source", *SLOW_HOST,
                     "--set", "safety.stroke.soft_limit_m=0.006", "--set", "safety.stroke.fade_band_m=0.002",
                     "--set", "safety.stroke.hard_limit_m=0.01", "--set", "safety.stroke.arm_tolerance_m=0.003")
     assert done.returncode == exit_codes.TRIPPED, done.stdout[-2000:] + done.stderr[-2000:]
