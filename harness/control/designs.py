@@ -98,13 +98,10 @@ REACHING_DOC = "rate eta at which the actuator force reaches its surface (1/s); 
 
 
 @dataclass(frozen=True)
-class ActuatorLqrWeights:
+class ActuatorLqrWeights(LqrWeights):
     """Diagonal LQR weights on the augmented state (Z, v): the groups of SPEC 6a and the net force."""
 
-    drifts: float = quantity(ge=0, doc="weight on every story drift (1/m^2 on the scale of the others)")
-    base_displacement: float = quantity(ge=0, doc="weight on y_b")
-    velocities: float = quantity(gt=0, doc="weight on every velocity")
-    force: float = quantity(gt=0, doc="weight q_v on the net base force v (1/N^2 on the same scale)")
+    force: float = quantity(gt=0, doc="weight q_v on the net base force v (1/N^2 on the scale of the others)")
 
 
 @dataclass(frozen=True)
