@@ -123,7 +123,7 @@ from typing import ClassVar
 import numpy as np
 
 from drivers.measurements import Measurements
-from harness.control.controllers import _SlidingModeInternals
+from harness.control.controllers import PhiSMC, _SlidingModeInternals
 from harness.control.surfaces import lqr_surface, sliding_poles
 from harness.errors import ModelError
 from harness.model.building import StateSpace
@@ -320,7 +320,7 @@ class ActuatorStateFeedbackSMC(_SlidingModeInternals):
         return self.force_N
 
 
-class ActuatorOutputSMC(_SlidingModeInternals):
+class ActuatorOutputSMC(PhiSMC):
     """Output sliding-mode control on the base mat augmented with the actuator, (A9)-(A12).
 
     Measures ``y_b, ydot_b, x_0, xdot_0`` and the load cell's ``u`` (``meas.actuator_force_N``):
@@ -347,17 +347,11 @@ class ActuatorOutputSMC(_SlidingModeInternals):
     ):
         if not reaching_rate_per_s > 0.0:
             raise ModelError(f"the reaching rate eta must be > 0 1/s, found {reaching_rate_per_s}")
-        self.name = name
-        self.base_mass_kg = float(base_mass_kg)
-        self.restoring_stiffness_N_per_m = float(restoring_stiffness_N_per_m)
-        self.p1_per_s = float(p1_per_s)
-        self.phi = float(phi)
-        self.delta = float(delta)
         self.actuator = actuator
         self.reaching_rate_per_s = float(reaching_rate_per_s)
         #: Force the phi surface asks for (N), u_phi of (A10).
         self.target_force_N = 0.0
-        self.reset()
+        super().__init__(name, base_mass_kg, restoring_stiffness_N_per_m, p1_per_s, phi, delta)
 
     def reset(self) -> None:
         """Clear the internals."""
@@ -368,10 +362,9 @@ class ActuatorOutputSMC(_SlidingModeInternals):
         """The force command (N) from the measured base mat, table, load cell and the friction estimate."""
         m_b, k_b, p1, delta = self.base_mass_kg, self.restoring_stiffness_N_per_m, self.p1_per_s, self.delta
         w_f, k_h = self.actuator.bandwidth_rad_s, self.actuator.stiffness_N_per_m
-        y_b, ydot_b, u = meas.base_displacement_m, meas.base_velocity_m_s, meas.actuator_force_N
+        ydot_b, u = meas.base_velocity_m_s, meas.actuator_force_N
         x_b, xdot_b = meas.sliding_displacement_m, meas.sliding_velocity_m_s
-        s_1 = p1 * y_b + ydot_b  # Eq. 18
-        u_phi = -m_b * p1 * ydot_b + self.phi * k_b * x_b + friction_N - delta * s_1 / m_b  # Eq. 23
+        u_phi = super().update(t, dt, meas, friction_N, state)  # the phi controller's force, Eq. 18-23
         s = (u - u_phi) / (m_b * w_f)  # (A10)
         base_acceleration = (u - friction_N - k_b * x_b) / m_b  # (A11), V_1 unmeasured
         target_rate = (self.phi * k_b * xdot_b - (m_b * p1 + delta / m_b) * base_acceleration
