@@ -35,11 +35,12 @@ from harness.profile import load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
 from harness.runs.simulate import StudyOptions, run_study  # noqa: E402
 
-#: The rig of earlier versions: a force source with a first-order lag, the table a motion source.
-FORCE_SOURCE_RIG = ["rig.actuator.model=first_order", "rig.table.model=motion_source",
-                    "safety.force.velocity_feedback_Ns_per_m=0"]
-#: The columns of the dry-run table: (name, lockstep dry run's overrides, or None for ideal control).
-PREDICTIONS = (("ideal", None), ("force source", FORCE_SOURCE_RIG), ("servo-hydraulic", []))
+#: Ideal control: the column that is a simulation, not a dry run.
+IDEAL = "ideal"
+#: The columns of the dry-run table: (name, the profile's variant for the lockstep dry run). The
+#: profile's ``force_source`` variant is the rig of earlier versions; no variant is the shipped rig.
+PREDICTIONS: tuple[tuple[str, str | None], ...] = ((IDEAL, None), ("force source", "force_source"),
+                                                   ("servo-hydraulic", None))
 #: Rows of the dry-run table: (flattened peak key, label).
 PREDICTED = (
     ("drift_1_m", "story 1 drift reduction %"),
@@ -135,11 +136,11 @@ def predictions(profile_path: Path, records_dir: str, overrides: list[str], log_
         options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0, duration_s=30.0)
         ideal = run_study(load_profile(profile_path, overrides=overrides), options)
         results[record] = {"passive": ideal.cases["passive"].peaks.flatten()}
-        for name, rig in PREDICTIONS:
-            if rig is None:
+        for name, variant in PREDICTIONS:
+            if name == IDEAL:
                 results[record][name] = ideal.cases["controlled"].peaks.flatten()
                 continue
-            profile = load_profile(profile_path, overrides=[*overrides, *rig])
+            profile = load_profile(profile_path, variant=variant, overrides=overrides)
             run = dry_run(profile, DryRunOptions(study=options, lockstep=True, show_console=False, compare=False,
                                                  log_dir=log_dir))
             outcome = run.session.outcome
