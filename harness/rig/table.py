@@ -136,17 +136,16 @@ class TablePlant:
         """The live plant's time (s): record time while the table plays, else the rig's."""
         return self.record_time_s if self.running else self._held_time_s
 
-    def table_truth(self) -> tuple[float, float, float]:
-        """Achieved table ``(x_0, xd_0, xdd_0)`` now (m, m/s, m/s^2), with the plant's last input held."""
+    def _motion(self, force_N: float) -> tuple[float, float, float, float]:
+        """Achieved table ``(x_0, xd_0, xdd_0)`` and the base mat's acceleration now, ``force_N`` as in :meth:`advance`."""
         live, t = self.live, self.time_s
         x0, v0 = live.table_now(t)
-        return x0, v0, live.accelerations(t, self._input)[0]
+        table_acc, base_acc = live.accelerations(t, force_N)
+        return x0, v0, table_acc, base_acc
 
-    def drive(self) -> tuple[float, float, float]:
-        """The table's drive ``(x_d, xd_d, xdd_d)`` now (m, m/s, m/s^2): the record, or the hold."""
-        if self.running:
-            return self.motion.sample(self.record_time_s)
-        return float(self._hold[0]), 0.0, 0.0
+    def table_truth(self) -> tuple[float, float, float]:
+        """Achieved table ``(x_0, xd_0, xdd_0)`` now (m, m/s, m/s^2), with the plant's last input held."""
+        return self._motion(self._input)[:3]
 
     def truth(self, out: np.ndarray, force_N: float) -> None:
         """The twelve true signals of :data:`harness.rig.sensors.SIGNALS` into ``out`` (SI).
@@ -154,14 +153,9 @@ class TablePlant:
         ``force_N`` is what the plant integrates with now (:meth:`advance`): the actuator
         force, or a servo-hydraulic actuator's command.
         """
-        live = self.live
-        y = live.y
-        t = self.time_s
-        x0, v0 = live.table_now(t)
-        a0, base_acc = live.accelerations(t, force_N)
-        out[0], out[1], out[2] = x0, v0, a0
+        y = self.live.y
+        out[0], out[1], out[2], out[5] = self._motion(force_N)
         out[3], out[4] = y[self._i_yb], y[self._i_vb]
-        out[5] = base_acc
         out[6], out[7], out[8] = y[0], y[1], y[2]
         np.dot(self._floor_map, y[: self._size], out=self._floor_acc)
         out[9:12] = self._floor_acc
