@@ -12,6 +12,7 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
@@ -32,6 +33,21 @@ def usable_groups(runs: Sequence[RunData], usable) -> list[RecordGroup]:
     """The record groups holding only the runs ``usable(run)`` accepts; groups left empty are dropped."""
     groups = [group.having([bool(usable(run)) for run in group.runs]) for group in record_groups(runs)]
     return [group for group in groups if group.runs]
+
+
+def record_panels(groups: Sequence[RecordGroup], single_px: int, panel_px: int = PANEL_PX,
+                  sharey: bool = False) -> tuple[Figure, list[Axes]]:
+    """A figure with one panel per record group, stacked on a shared x axis."""
+    fig = figure(grouped_height(single_px, groups, panel_px))
+    return fig, list(fig.subplots(len(groups), 1, sharex=True, sharey=sharey, squeeze=False)[:, 0])
+
+
+def head_panels(fig: Figure, axes: Sequence[Axes], heading: str) -> None:
+    """``heading`` over the one panel, or over the figure with ", one panel per record"."""
+    if len(axes) == 1:
+        axes[0].set_title(heading)
+    else:
+        fig.suptitle(heading + ", one panel per record")
 
 
 def title_panel(ax: Axes, group: RecordGroup) -> None:
@@ -96,8 +112,7 @@ def stroke_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) ->
     if not groups:
         return None
     with matplotlib.rc_context(style()):
-        fig = figure(grouped_height(520, groups))
-        axes = fig.subplots(len(groups), 1, sharex=True, sharey=True, squeeze=False)[:, 0]
+        fig, axes = record_panels(groups, 520, sharey=True)
         shaded = limits = False
         for ax, group in zip(axes, groups, strict=True):
             for run, colour, text in group.members():
@@ -112,11 +127,7 @@ def stroke_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) ->
         extras = [text for text, present in (("dotted lines: events", any(run.events for g in groups for run in g.runs)),
                                              ("shading: interlock active", shaded)) if present]
         title = "Bearing stroke" + (" against its limits" if limits else "")
-        heading = title + (f" ({'; '.join(extras)})" if extras else "")
-        if len(groups) == 1:
-            axes[0].set_title(heading)
-        else:
-            fig.suptitle(heading + ", one panel per record")
+        head_panels(fig, axes, title + (f" ({'; '.join(extras)})" if extras else ""))
         return save(fig, "stroke", title, out_dir)
 
 
@@ -161,8 +172,7 @@ def sliding_variable_plot(runs: Sequence[RunData], out_dir: Path, options: PlotO
     if not groups:
         return None
     with matplotlib.rc_context(style()):
-        fig = figure(grouped_height(440, groups, 260))
-        axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
+        fig, axes = record_panels(groups, 440, 260)
         for ax, group in zip(axes, groups, strict=True):
             for run, colour, text in group.members():
                 ax.plot(record_time(run), run["sliding_variable_m_s"] * 1e3, color=colour, lw=1.0, label=text)
@@ -171,11 +181,7 @@ def sliding_variable_plot(runs: Sequence[RunData], out_dir: Path, options: PlotO
             title_panel(ax, group)
             legend(ax)
         axes[-1].set_xlabel("Record time (s)")
-        heading = "Sliding variable S of each run's controller"
-        if len(groups) == 1:
-            axes[0].set_title(heading)
-        else:
-            fig.suptitle(heading + ", one panel per record")
+        head_panels(fig, axes, "Sliding variable S of each run's controller")
         return save(fig, "sliding_variable", "Sliding variable", out_dir)
 
 
@@ -187,8 +193,7 @@ def tracking_error_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOpt
     if not groups:
         return None
     with matplotlib.rc_context(style()):
-        fig = figure(grouped_height(400, groups, 260))
-        axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
+        fig, axes = record_panels(groups, 400, 260)
         for ax, group in zip(axes, groups, strict=True):
             for run, colour, text in group.members():
                 target = targets[id(run)]

@@ -20,7 +20,7 @@ from harness.peaks import run_peaks
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend, peak_of, record_time, small_runs
-from harness.report.plots_control import grouped_height, title_panel, usable_groups
+from harness.report.plots_control import head_panels, record_panels, title_panel, usable_groups
 from harness.report.record_groups import RecordGroup
 from harness.report.reference import passive_reference
 from harness.rowlayout import drift
@@ -149,8 +149,7 @@ def hysteresis_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions
         return None
     normalised = all(_weight(run) for group in groups for run in group.runs)
     with matplotlib.rc_context(style()):
-        fig = figure(grouped_height(640, groups, 360))
-        axes = fig.subplots(len(groups), 1, sharex=True, sharey=True, squeeze=False)[:, 0]
+        fig, axes = record_panels(groups, 640, 360, sharey=True)
         for ax, group in zip(axes, groups, strict=True):
             for run, colour, label in group.members():
                 source = _hysteresis_source(run)
@@ -165,9 +164,5 @@ def hysteresis_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions
             title_panel(ax, group)
             legend(ax)
         axes[-1].set_xlabel("Sliding displacement x_b (mm)")
-        heading = "Bearing hysteresis" + (" (F/W: the friction coefficient mobilised)" if normalised else "")
-        if len(groups) == 1:
-            axes[0].set_title(heading)
-        else:
-            fig.suptitle(heading + ", one panel per record")
+        head_panels(fig, axes, "Bearing hysteresis" + (" (F/W: the friction coefficient mobilised)" if normalised else ""))
         return save(fig, "hysteresis", "Bearing hysteresis against sliding displacement", out_dir)
