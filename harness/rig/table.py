@@ -74,7 +74,6 @@ class TablePlant:
         self.held = Plant(building, bearing, held_table, rtol, params)
         self.duration_s = float(motion.duration_s)
         model = self.record.model
-        self._n = building.n_stories
         self._i_yb, self._i_vb = model.i_base_displacement, model.i_base_velocity
         floor_map, _ = acceleration_maps(building)
         self._floor_map = np.ascontiguousarray(floor_map[:3])
@@ -85,10 +84,9 @@ class TablePlant:
     def reset(self) -> None:
         """Plant at rest, table held at the record's first displacement, not running."""
         self.record.reset()
-        self.held.reset()
         self.live = self.held
         self._hold[:] = float(self.motion.displacement_m[0])
-        self.held.reset()  # a dynamic table starts at its drive, now the hold
+        self.held.reset()  # after the hold is set: a dynamic table starts at its drive
         self.running = False
         self.record_time_s = 0.0
         self._held_time_s = 0.0
@@ -97,7 +95,7 @@ class TablePlant:
 
     @property
     def y(self) -> np.ndarray:
-        """State ``(Z, nu)`` of the live plant (do not keep across start/stop)."""
+        """State ``(Z, nu[, rig states])`` of the live plant (do not keep across start/stop)."""
         return self.live.y
 
     def start(self) -> None:
