@@ -187,10 +187,12 @@ class Plant:
         return out
 
     def friction_force(self, t: float, table_v: float | None = None) -> float:
-        """The bearing friction force of the current state at ``t`` (N)."""
-        v0 = self.table.state(t)[1] if table_v is None else table_v
-        if self.table_dynamic:
-            v0 = self.table_now(t)[1]
+        """The bearing friction force of the current state at ``t`` (N).
+
+        ``table_v`` (the record's table velocity, when the caller has it) is used only where the
+        table follows its record; a servo-hydraulic table's velocity is its state's.
+        """
+        v0 = self.table_now(t)[1] if table_v is None or self.table_dynamic else table_v
         return friction_force(self.y[self.model.i_base_velocity] - v0, self.y[self.i_nu], self.bearing_params)
 
     def responses(self, times: np.ndarray, states: np.ndarray, forces: np.ndarray) -> dict[str, np.ndarray]:
