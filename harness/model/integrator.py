@@ -107,8 +107,13 @@ def derivative(
     size: int = a_matrix.shape[0]  # numpy's stubs give shape entries no type
     coupled = rig.shape[0] > 0
     first = size + 1
-    if coupled and rig[hy.TABLE_DYNAMIC] > 0.0:
-        x0, v0 = y[first + hy.TABLE_X], y[first + hy.TABLE_V]
+    x_d = v_d = a_d = 0.0  # the table's drive (the record, or the hold), with the rig's hydraulics
+    if coupled:
+        x_d, v_d, a_d = table_drive(t, accel, velocity, displacement, record_dt)
+        if rig[hy.TABLE_DYNAMIC] > 0.0:
+            x0, v0 = y[first + hy.TABLE_X], y[first + hy.TABLE_V]
+        else:
+            x0, v0 = x_d, v_d
     else:
         x0, v0 = table_state(t, accel, velocity, displacement, record_dt)
     sliding_velocity = y[size - 1] - v0
@@ -126,19 +131,18 @@ def derivative(
     out[size] = hysteretic_rate(sliding_velocity, nu, bearing)
     if coupled:
         reaction = restoring_stiffness * (y[size // 2 - 1] - x0) + friction - actuator_force
-        _rig_rates(t, y, out, size, u, reaction, x0, v0, sliding_velocity, rig, accel, velocity, displacement, record_dt)
+        _rig_rates(y, out, size, u, reaction, x0, v0, sliding_velocity, rig, x_d, v_d, a_d)
 
 
 @numba.njit(cache=True, nogil=True)
 def _rig_rates(
-    t: float, y: np.ndarray, out: np.ndarray, size: int, u: float, reaction: float, x0: float, v0: float,
-    sliding_velocity: float, rig: np.ndarray, accel: np.ndarray, velocity: np.ndarray, displacement: np.ndarray,
-    record_dt: float,
+    y: np.ndarray, out: np.ndarray, size: int, u: float, reaction: float, x0: float, v0: float,
+    sliding_velocity: float, rig: np.ndarray, x_d: float, v_d: float, a_d: float,
 ) -> None:
     """Rates of the rig's states, and the pinned base mat (SPEC 7a, 7b).
 
     ``reaction`` is what the payload puts on the table: springs, bearing friction and the
-    control actuator's reaction, ``k_b x_b + f - u`` (N).
+    control actuator's reaction, ``k_b x_b + f - u`` (N); ``x_d, v_d, a_d`` the drive the table's servo tracks.
     """
     first = size + 1
     if rig[hy.ACTUATOR_HYDRAULIC] > 0.0:
@@ -152,7 +156,6 @@ def _rig_rates(
     else:
         for k in range(3):
             out[first + hy.ACTUATOR_PRESSURE + k] = 0.0
-    x_d, v_d, a_d = table_drive(t, accel, velocity, displacement, record_dt)
     table_acceleration = a_d
     if rig[hy.TABLE_DYNAMIC] > 0.0:
         mass, area = rig[hy.TABLE_MASS], rig[hy.TABLE_CYLINDER + hy.AREA]
