@@ -15,6 +15,7 @@ simulated offline.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 import subprocess
@@ -27,6 +28,7 @@ from pathlib import Path
 
 from drivers.link import HarnessLink
 from drivers.protocol_values import RigCommand
+from drivers.reader import Sample
 from harness.can_config import CanConfig
 from harness.control.factory import make_controller
 from harness.errors import BusError
@@ -57,6 +59,12 @@ from harness.simulation.twin import run_rig_twin
 PRIVATE_BUS_INTERFACE = "seqpacket"
 RIG_APPEAR_TIMEOUT_S = 60.0
 IN_PROCESS_SWITCH_INTERVAL_S = 2e-4
+#: Frames the harness sends to bring the rig into lockstep, and to show it the command counter, before the run.
+#: The rig's E2E check rejects the first frame of a harness that follows another within its new-sender
+#: silence (the counter jumps; the check resynchronises on it): the second is then accepted.
+LOCKSTEP_SYNC_ATTEMPTS = 3
+#: Longest wait (s) for the rig's answer to one of those frames; the rig answers in lockstep at once.
+LOCKSTEP_SYNC_WAIT_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -117,6 +125,11 @@ def _rig_process(profile: Profile, can, lockstep: bool) -> subprocess.Popen:
     return process
 
 
+def _answered_after(status: Sample, seen: int, answered: Callable[[], bool]) -> bool:
+    """A RIG_STATUS frame arrived after the ``seen``-th, and ``answered()`` holds."""
+    return status.count > seen and answered()
+
+
 class RigCoordinator:
     """The harness side's dealings with the virtual rig: wait for it, lockstep; its :attr:`table` starts and stops the table.
 
@@ -143,7 +156,8 @@ class RigCoordinator:
         #: The virtual table's start and stop: the same RIG_CONTROL frames `harness run` sends a real one.
         self.table = CanTableLink(lockstep)
 
-    def _poll_until(self, done: Callable[[], bool], timeout_s: float, what: str) -> None:
+    def _poll_for(self, done: Callable[[], bool], timeout_s: float) -> bool:
+        """Poll the bus until ``done()`` (True) or ``timeout_s`` passed (False); raises if the rig process died."""
         link = self.link
         assert link is not None, "polled from on_link, once the link is open"
         deadline = time.monotonic() + timeout_s
@@ -153,24 +167,67 @@ class RigCoordinator:
                 detail = process.stderr.read().decode(errors="replace").strip()[-2000:] if process.stderr else ""
                 raise BusError(f"the virtual rig process exited with status {process.returncode}: {detail}")
             if time.monotonic() > deadline:
-                raise BusError(
-                    f"{what} within {timeout_s:g} s on {link.bus.channel_info}; start a rig with "
-                    "`harness rig PROFILE --interface ... --channel ...` (or drop --external-rig)"
-                )
+                return False
             link.reader.poll(0.0, block_s=0.05)
+        return True
+
+    def _no_answer(self, what: str, timeout_s: float) -> BusError:
+        assert self.link is not None
+        return BusError(
+            f"{what} within {timeout_s:g} s on {self.link.bus.channel_info}; start a rig with "
+            "`harness rig PROFILE --interface ... --channel ...` (or drop --external-rig)"
+        )
 
     def on_link(self, link: HarnessLink) -> None:
         """Wait for the rig's status frames; switch it to lockstep and note its step count."""
         self.link = link
         self.table.attach(link)
         status = link.reader.sample("RIG_STATUS")
-        self._poll_until(lambda: status.count > 0, self.appear_timeout_s, "no RIG_STATUS frame from a virtual rig")
+        if not self._poll_for(lambda: status.count > 0, self.appear_timeout_s):
+            raise self._no_answer("no RIG_STATUS frame from a virtual rig", self.appear_timeout_s)
         if self.lockstep:
-            seen = status.count
-            link.writer.rig_control(RigCommand.NONE, True, 0.0)
-            self._poll_until(lambda: status.count > seen, 5.0, "the rig did not answer the switch to lockstep")
-            self.base_step = int(status.values[status.index("step_index")])
+            self.base_step = self._enter_lockstep(link)
 
+    def _enter_lockstep(self, link: HarnessLink) -> int:
+        """Switch the rig to lockstep and step it once with a disabled command; return its step index then.
+
+        Each frame is sent again until the rig shows it was accepted (RIG_STATUS ``lockstep`` set;
+        ``step_index`` advanced): a harness that starts right after another one's run finds the rig's
+        counter check expecting the old run's next counter, and its first frame of each kind is
+        rejected. Unsynchronised, the run's first command would be the one lost, and the lockstep
+        loop would wait for a step that never comes. When the command had to be sent again, the
+        step index is read once more after a further wait: a first command that was only slow to be
+        answered has stepped the rig too.
+        """
+        status = link.reader.sample("RIG_STATUS")
+        lockstep, step_index = status.index("lockstep"), status.index("step_index")
+        self._send_until_answered(link, lambda: link.writer.rig_control(RigCommand.NONE, True, 0.0),
+                                  lambda: status.values[lockstep] == 1, "the rig did not answer the switch to lockstep")
+        before = status.values[step_index]
+        sent = self._send_until_answered(link, lambda: link.writer.command(0.0, False, 0.0),
+                                         lambda: status.values[step_index] > before,
+                                         "the rig did not step on a disabled command in lockstep")
+        if sent > 1:
+            self._poll_for(lambda: False, LOCKSTEP_SYNC_WAIT_S)
+        return int(status.values[step_index])
+
+    def _send_until_answered(
+        self, link: HarnessLink, send: Callable[[], object], answered: Callable[[], bool], what: str,
+    ) -> int:
+        """``send()`` until a RIG_STATUS frame after it shows ``answered()``; return the frames sent.
+
+        Raises
+        ------
+        BusError
+            No answer to any of :data:`LOCKSTEP_SYNC_ATTEMPTS` frames, or the rig process died.
+        """
+        status = link.reader.sample("RIG_STATUS")
+        for attempt in range(1, LOCKSTEP_SYNC_ATTEMPTS + 1):
+            seen = status.count
+            send()
+            if self._poll_for(functools.partial(_answered_after, status, seen, answered), LOCKSTEP_SYNC_WAIT_S):
+                return attempt
+        raise self._no_answer(f"{what} (sent {LOCKSTEP_SYNC_ATTEMPTS} times)", LOCKSTEP_SYNC_WAIT_S)
 
     def lockstep_wait(self, tick: ControlTick) -> Callable[[int, float], bool]:
         """The loop's lockstep wait: poll until the rig reports step ``base + k``."""

@@ -18,9 +18,11 @@ import json
 import threading
 import time
 import uuid
+from types import SimpleNamespace
 
 import pytest
 
+from drivers.decoder import RxStatus
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from harness.can_config import CanConfig
 from harness.can_link import open_harness, open_rig
@@ -32,6 +34,7 @@ from harness.rig.faults import fault_id_for
 from harness.rig.inbox import NEW_SENDER_SILENCE_S
 from harness.rig.virtual_rig import RigParts, VirtualRig
 from harness.runs.drive_reset import DriveResetRefused, reset_drive
+from harness.runs.dry_run import RigCoordinator
 from harness.runs.rig_service import run_rig_command
 from harness.runs.simulate import StudyOptions, prepare_motion
 from harness.safety.lifecycle import State
@@ -166,10 +169,15 @@ def test_a_new_harness_first_reset_is_not_lost_to_the_rolling_counter(bench):
 
 
 @pytest.fixture
-def served(profile, motion):
+def served_can() -> CanConfig:
+    """The fresh virtual channel of :func:`served`."""
+    return CanConfig(channel=f"served-{uuid.uuid4().hex[:10]}")
+
+
+@pytest.fixture
+def served(profile, motion, served_can):
     """A lockstep rig thread (0.2 s lockstep watchdog) on a fresh virtual channel, and a harness link."""
-    can = CanConfig(channel=f"served-{uuid.uuid4().hex[:10]}")
-    rig_link, link = open_rig(can), open_harness(can)
+    rig_link, link = open_rig(served_can), open_harness(served_can)
     config = dataclasses.replace(profile.rig, drive=DriveConfig(watchdog_timeout_s=0.05, lockstep_watchdog_timeout_s=0.2))
     parts = RigParts(profile.structure, profile.bearing, config, profile.simulation.rtol)
     rig = VirtualRig(parts, motion, rig_link, step_period_s=PERIOD, lockstep=True)
@@ -224,6 +232,35 @@ def test_reset_drive_reports_the_drives_refusal_with_its_cause(served):
     with pytest.raises(DriveResetRefused, match="kept its latch: it reports FAULT INJECTED .was HEARTBEAT_WATCHDOG."):
         reset_drive(link, verdict_timeout_s=0.3)
     assert rig.last_reset is ResetVerdict.CAUSE_PRESENT
+
+
+def test_a_harness_right_after_another_enters_lockstep_and_its_first_step_is_not_lost(served, served_can):
+    """A second run within the rig's new-sender silence: its first frames are rejected (the counter
+    jumps); the coordinator sends them again, so the loop's first command steps the rig."""
+    rig, link = served
+    for _ in range(3):  # the previous run's commands: the rig now expects command counter 3
+        link.writer.command(0.0, False, 0.0)
+    link.writer.rig_control(RigCommand.NONE, True, 0.0)
+    deadline = time.monotonic() + 5.0
+    while rig.inbox.decoder.accepted("ACTUATOR_CMD") < 3:
+        assert time.monotonic() < deadline, "the rig must take the previous run's commands"
+        time.sleep(0.01)
+    rejected_before = rig.inbox.decoder.rejected("ACTUATOR_CMD", RxStatus.SKIPPED_COUNTER)
+
+    fresh = open_harness(served_can)
+    try:
+        coordinator = RigCoordinator(lockstep=True, period_s=PERIOD)
+        coordinator.on_link(fresh)  # at once: well within NEW_SENDER_SILENCE_S of the previous frames
+        assert rig.inbox.decoder.rejected("ACTUATOR_CMD", RxStatus.SKIPPED_COUNTER) == rejected_before + 1, (
+            "the new harness's first command was rejected, and sent again"
+        )
+        assert coordinator.base_step == rig.step_index
+        wait = coordinator.lockstep_wait(SimpleNamespace(reader=fresh.reader))
+        fresh.writer.command(0.0, False, 0.0)  # tick 0's command
+        assert wait(1, 2.0), "the loop's first command stepped the rig"
+        assert rig.step_index == coordinator.base_step + 1
+    finally:
+        fresh.close()
 
 
 # ----------------------------------------------------------------- five runs, one rig
