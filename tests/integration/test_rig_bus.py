@@ -481,7 +481,9 @@ def test_ctrl_c_stops_a_rig_process_cleanly():
         f"sys.exit(run_rig_command({str(PROFILES / 'nceer_4dof.yaml')!r}, interface='virtual', channel='sigint', "
         "options=StudyOptions(record='synthetic', duration_s=3.0), on_ready=lambda rig: print('ready', flush=True)))\n"
     )
-    process = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=PROFILES.parent)
+    # an operator's terminal delivers Ctrl-C; a suite started as a background job would hand the rig SIGINT ignored
+    process = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=PROFILES.parent,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         assert process.stdout.readline().strip() == b"ready", process.stderr.read().decode()[-2000:]
         process.send_signal(signal.SIGINT)
