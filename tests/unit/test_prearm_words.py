@@ -41,11 +41,12 @@ def _set(**values):
 
 
 SENSOR_AGE_MS = CONFIG.sensors.max_sensor_age_s * 1e3
+FRESH = f"expected 0 <= age <= {SENSOR_AGE_MS:.2f} ms"
 STATUS_AGE_MS = CONFIG.actuator.max_status_age_s * 1e3
 PANEL_AGE_MS = CONFIG.estop.max_panel_age_s * 1e3
 CASES = [
-    (_set(table_age_s=0.0305), f"sensors_fresh: table age 30.50 ms, base age 1.00 ms, expected 0 <= age <= {SENSOR_AGE_MS:.2f} ms"),
-    (_set(base_age_s=-0.001), f"sensors_fresh: table age 1.00 ms, base age -1.00 ms, expected 0 <= age <= {SENSOR_AGE_MS:.2f} ms"),
+    (_set(table_age_s=0.0305), f"sensors_fresh: table age 30.50 ms, base age 1.00 ms, {FRESH}"),
+    (_set(base_age_s=-0.001), f"sensors_fresh: table age 1.00 ms, base age -1.00 ms, {FRESH}"),
     (_set(base_velocity_m_s=math.nan), "sensors_valid: found (0.0, 0.0, 0.0, nan), expected finite values"),
     (_set(e2e_ok=False), "e2e_ok: the newest frame failed its counter/CRC check, expected good frames"),
     (_set(base_displacement_m=0.0123),
