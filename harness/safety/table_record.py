@@ -136,8 +136,7 @@ def gate_index(velocity_m_s: np.ndarray, dt_s: float) -> int | None:
     swings = beyond[np.concatenate(([True], signs[1:] != signs[:-1]))] if beyond.size else beyond  # each swing's start
     if first >= v.size or loud.size == 0 or swings.size < MIN_HALF_CYCLES:
         return None
-    gate = max(first, int(loud[0]), int(swings[MIN_HALF_CYCLES - 1]))
-    return gate if gate < v.size else None
+    return max(first, int(loud[0]), int(swings[MIN_HALF_CYCLES - 1]))  # each an index of v: first < v.size
 
 
 class TableRecordCheck:
@@ -159,6 +158,8 @@ class TableRecordCheck:
         Evaluations so far.
     judged_at_s, worst_at_s : float
         Record time of the latest evaluation and of the one that gave :attr:`worst` (s; NaN before).
+    off_reason : str
+        Why there is no check (read only while :attr:`tracking` is None).
     """
 
     __slots__ = (
@@ -202,7 +203,6 @@ class TableRecordCheck:
         drive = np.interp(grid, record_t, np.asarray(velocity_m_s, dtype=float), right=0.0)
         self.tracking = OnlineTracking(drive, self.period_s, MAX_LAG_S)
         self.gate = gate_index(drive, self.period_s)
-        self.off_reason = ""
         self.reset()
 
     def ignore(self, reason: str) -> None:
