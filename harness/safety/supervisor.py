@@ -295,8 +295,7 @@ class Supervisor:
             From any other state.
         """
         before = self.lifecycle.state
-        present = self._still_present(health) if before is State.TRIPPED else ""
-        self.lifecycle.reset(t, present)
+        self.lifecycle.reset(t, self._still_present(health))  # "" from DONE: no trip reason latched
         self._clear_history()
         self._state_event(t, before, "reset")
         self._off(t)
