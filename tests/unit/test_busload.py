@@ -14,8 +14,8 @@ from drivers.busload import BusLoad, bus_load, check_bus_load, frame_bits
 from drivers.codec import load_protocol
 from drivers.errors import BusLoadError, ProtocolError
 from harness.can_config import RATE_FIELDS, CanConfig
+from harness.config.schema import build
 from harness.errors import ProfileError
-from harness.schema import build
 
 PROTOCOL = load_protocol()
 
