@@ -77,7 +77,7 @@ def bare_loop(rate_hz: float, duration_s: float) -> dict:
     the loop measures its ticks (``time.thread_time`` around the body), here around nothing:
     the floor of that measurement.
     """
-    from harness.scheduler import FixedRateScheduler
+    from harness.realtime.scheduler import FixedRateScheduler
 
     scheduler = FixedRateScheduler(1.0 / rate_hz, 200e-6)
     n = int(duration_s * rate_hz)

@@ -22,7 +22,7 @@ from harness.commands.options import (
     wrap,
 )
 from harness.commands.output import compile_kernels
-from harness.interrupts import stop_on_signals
+from harness.realtime.interrupts import stop_on_signals
 
 
 def add_parser(sub) -> None:

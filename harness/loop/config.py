@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from harness.config.schema import quantity
-from harness.loop.realtime import RealtimeConfig
+from harness.realtime.host import RealtimeConfig
 
 
 @dataclass(frozen=True)
