@@ -38,7 +38,6 @@ from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
 from harness.motions import GroundMotion
 from harness.paths import LOG_DIR
-from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.recording import load_run
 from harness.recording.runfolder import check_log_dir
@@ -51,6 +50,7 @@ from harness.runs.simulate import (
     prepare_motion,
     resolve_profile,
 )
+from harness.signals.peaks import Peaks, run_peaks
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 from harness.simulation.twin import run_rig_twin
 

@@ -32,11 +32,11 @@ from harness.profile import Profile
 from harness.recording import RunFolder
 from harness.recording.layout import Outcome, RunKind
 from harness.recording.runfolder import check_log_dir
-from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
 from harness.safety.table_record import NO_RECORD
 from harness.safety.weakening import summary
+from harness.signals.columns import CONTROL_ROW, PROTOCOL_STORIES
 
 if TYPE_CHECKING:
     from harness.motions import GroundMotion

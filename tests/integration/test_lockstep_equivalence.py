@@ -22,11 +22,11 @@ from harness.can_config import CanConfig
 from harness.can_link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import make_controller
-from harness.peaks import peak_responses
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig, SensorsConfig
 from harness.rig.virtual_rig import RigParts, VirtualRig
 from harness.runs.simulate import StudyOptions, prepare_motion, run_study
+from harness.signals.peaks import peak_responses
 from tests.conftest import PROFILES
 
 STEP_TIMEOUT_S = 5.0

@@ -15,12 +15,12 @@ import pytest
 from harness import exit_codes
 from harness.cli import build_parser, main
 from harness.commands.rig import banner
-from harness.peaks import run_peaks
 from harness.profile import load_profile
 from harness.recording import load_run
 from harness.report.quantities import CONSOLE_WORDING, response_quantities
 from harness.runs.dry_run import DryRunOptions, dry_run
 from harness.runs.simulate import StudyOptions
+from harness.signals.peaks import run_peaks
 
 RUN = ["run", "--record", "synthetic", "--duration", "1", "--interface", "seqpacket", "--channel", "nowhere"]
 
