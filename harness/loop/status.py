@@ -1,7 +1,7 @@
 """What the live console shows, in a fixed-size shared memory block another process can read.
 
 The control loop overwrites a :class:`LoopStatus` in place every tick; the live console
-runs in a child process (:mod:`harness.console_view`) that attaches to the same block and
+runs in a child process (:mod:`harness.console.view`) that attaches to the same block and
 draws it, so rendering never holds the loop process's interpreter lock.
 
 The block is a small temporary file (in ``/dev/shm`` where it exists), mapped with

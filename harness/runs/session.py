@@ -18,7 +18,7 @@ from drivers.link import HarnessLink
 from harness import exit_codes
 from harness.can_config import CanConfig
 from harness.can_link import open_harness
-from harness.console import LiveConsole
+from harness.console.live import LiveConsole
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig

@@ -187,9 +187,9 @@ def test_the_import_graph_has_no_cycle() -> None:
 
 
 #: Layers with a rule of their own: a module may import these only from the layers named.
-#: The live console (``harness.console``, ``harness.console_view``) is a view of the loop's
-#: status, drawn for a run: it sits with the runs.
-_RUNS = ("harness.cli", "harness.commands", "harness.runs", "harness.sweep", "harness.console", "harness.console_view")
+#: The live console (``harness.console``) is a view of the loop's status, drawn for a run: it
+#: sits with the runs.
+_RUNS = ("harness.cli", "harness.commands", "harness.runs", "harness.sweep", "harness.console")
 UPPER_LAYERS = {
     "harness.commands": ("harness.cli", "harness.commands"),
     "harness.runs": _RUNS,

@@ -7,7 +7,7 @@ import tracemalloc
 from rich.console import Console
 
 from drivers.protocol_values import DriveState, FaultCode
-from harness.console import LiveConsole, fault_name
+from harness.console.live import LiveConsole, fault_name
 from harness.loop.status import EVENT_LINES, LoopStatus
 from tests.unit.test_control_tick import PERIOD_S, Bench
 

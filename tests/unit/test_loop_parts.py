@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from harness.console import LiveConsole, stroke_bar
+from harness.console.live import LiveConsole, stroke_bar
 from harness.loop.operator import OperatorSignals
 from harness.loop.runner import LoopStatus
 from harness.loop.timing import TimingStats
