@@ -35,7 +35,7 @@ from typing import Any
 
 import yaml
 
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 from harness.config.schema import build, internal, quantity, to_data
 from harness.config.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
 from harness.control.config import ControlConfig, SimulationConfig

@@ -29,7 +29,7 @@ from pathlib import Path
 from drivers.link import HarnessLink
 from drivers.protocol_values import RigCommand
 from drivers.reader import Sample
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 from harness.control.factory import make_controller
 from harness.errors import BusError
 from harness.loop.table_link import CanTableLink
@@ -316,7 +316,7 @@ def serving_virtual_rig(
         The processed record (the in-process rig's table; the rig process prepares its own).
     external_rig : bool
     """
-    from harness.can_link import open_rig
+    from harness.canbus.link import open_rig
     from harness.rig.virtual_rig import VirtualRig
 
     rate_hz = profile.control.rate_hz

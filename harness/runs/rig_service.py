@@ -2,7 +2,7 @@
 
 The CLI parses the arguments and calls :func:`run_rig_command`; this module does
 the rest: load the profile and record, open the bus (checked by
-:func:`harness.can_link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
+:func:`harness.canbus.link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
 event, then stop cleanly: drive disabled and announced, bus shut down.
 
 The rig serves run after run. Each change it sees (the drive's state and fault, the
@@ -20,8 +20,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from harness import exit_codes
-from harness.can_config import CanConfig
-from harness.can_link import open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_rig
 from harness.errors import EXPECTED_ERRORS, BusError
 from harness.model.warmup import warm_up
 from harness.profile import Profile, load_profile

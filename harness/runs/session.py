@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 
 from drivers.link import HarnessLink
 from harness import exit_codes
-from harness.can_config import CanConfig
-from harness.can_link import open_harness
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness
 from harness.console.live import LiveConsole
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator

@@ -18,8 +18,8 @@ import pytest
 
 from drivers.measurements import Measurements
 from drivers.protocol_values import DriveState, RigCommand
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import make_controller
 from harness.profile import load_profile

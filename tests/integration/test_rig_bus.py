@@ -22,8 +22,8 @@ import pytest
 from drivers.decoder import RxStatus
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from harness import exit_codes
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.errors import BusError
 from harness.profile import load_profile
 from harness.rig.config import (

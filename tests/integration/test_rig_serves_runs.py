@@ -24,8 +24,8 @@ import pytest
 
 from drivers.decoder import RxStatus
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.cli import main
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig

@@ -17,7 +17,7 @@ import uuid
 
 import pytest
 
-from harness.can_link import open_harness, open_rig
+from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.loop.runner import ControlLoop

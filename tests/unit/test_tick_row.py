@@ -6,8 +6,8 @@ import uuid
 
 import pytest
 
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile

@@ -6,7 +6,7 @@ rate from one field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
 control, drive reset) are budgeted at the rate they may burst at.
 
 The section is the harness's (built and checked by :mod:`harness.config.schema`); the
-drivers never see it. :mod:`harness.can_link` hands its values to the drivers as
+drivers never see it. :mod:`harness.canbus.link` hands its values to the drivers as
 plain arguments (interface, channel, bitrate, rates as a mapping, ...).
 """
 
