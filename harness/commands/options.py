@@ -202,11 +202,11 @@ def json_file(text: str) -> str:
 def output_dir(text: str) -> str:
     """An argparse ``type=`` for a directory the command writes into (created if missing): writable, not a file.
 
-    Writability is tried (:func:`harness.writable.directory_problem`), so ``--log-dir /proc/1``
+    Writability is tried (:func:`harness.recording.writable.directory_problem`), so ``--log-dir /proc/1``
     is refused here, before a bus is opened or a rig started, and not by the run folder's
     ``mkdir`` once the run has begun.
     """
-    from harness.writable import directory_problem
+    from harness.recording.writable import directory_problem
 
     if not text.strip():
         raise argparse.ArgumentTypeError("found an empty path, expected a directory")

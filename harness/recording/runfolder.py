@@ -278,7 +278,7 @@ def check_log_dir(log_dir: Path | str) -> None:
     RunFolderError
         Saying what is wrong with it (a file, below a file, not writable) and what was expected.
     """
-    from harness.writable import directory_problem
+    from harness.recording.writable import directory_problem
 
     problem = directory_problem(log_dir)
     if problem is not None:

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from harness import strict_json
+import harness.recording.strict_json as strict_json
 from harness.recording.layout import (
     EVENTS_FILE,
     FORMAT_NAME,

@@ -12,7 +12,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness import strict_json
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import (
     build_controller_for_rig,
@@ -24,6 +23,7 @@ from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
 from harness.motions import GroundMotion, check_table_limits, load_motion
 from harness.profile import Profile
+from harness.recording import strict_json
 from harness.rig.truth import TruthDifference, truth_metadata
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 

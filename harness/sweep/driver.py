@@ -20,8 +20,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from harness import strict_json
 from harness.errors import ProfileError
+from harness.recording import strict_json
 from harness.sweep.cases import CaseSpec
 from harness.sweep.engines import Engine
 from harness.sweep.rows import FAILED, OUTCOME

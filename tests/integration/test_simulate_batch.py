@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness import strict_json
 from harness.cli import main
+from harness.recording import strict_json
 from harness.recording.reader import load_runs
 from harness.report.batch_summary import BatchCase, peaks_per_record, reduction_summary
 from harness.runs.simulate_batch import split_list

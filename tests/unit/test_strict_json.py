@@ -9,8 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness import strict_json
-from harness.recording import RunFolder, load_run, write_simulation_case
+from harness.recording import RunFolder, load_run, strict_json, write_simulation_case
 from harness.recording.metadata import write_json_atomic
 from harness.report.reference import reference_tables
 from harness.runs.run_context import reference_entry
