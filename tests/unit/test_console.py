@@ -23,7 +23,8 @@ from rich.console import Console
 import harness.console.live
 from harness.console.live import LiveConsole, view_command, view_environment
 from harness.loop.runner import LoopStatus as LoopStatusFromRunner
-from harness.loop.status import STATE_NAMES, TEXT_FIELDS, LoopStatus, truncate_utf8
+from harness.loop.status import STATE_NAMES, LoopStatus
+from harness.loop.status_block import truncate_utf8
 from harness.safety.lifecycle import State
 
 #: Generous: a cold child start on a loaded two-core VM can take seconds.
@@ -103,7 +104,7 @@ def test_a_reader_sees_every_change_and_cannot_write():
 
 @pytest.mark.parametrize("text", ["é" * 200, "a" + "é" * 200, "€" * 100, "🙂" * 80, "plain " * 60])
 def test_text_is_truncated_at_a_character_boundary(text):
-    capacity = dict((name, capacity) for name, capacity, _ in TEXT_FIELDS)["last_event"]
+    capacity = LoopStatus.last_event.capacity
     with LoopStatus() as status:
         status.last_event = text
         kept = status.last_event

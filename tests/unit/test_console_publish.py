@@ -8,7 +8,8 @@ from rich.console import Console
 
 from drivers.protocol_values import DriveState, FaultCode
 from harness.console.live import LiveConsole, fault_name
-from harness.loop.status import EVENT_LINES, LoopStatus
+from harness.loop.status import LoopStatus
+from harness.loop.status_block import EVENT_LINES
 from tests.unit.test_control_tick import PERIOD_S, Bench
 
 
