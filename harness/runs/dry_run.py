@@ -3,7 +3,7 @@
 By default the rig runs as a separate ``harness rig`` process, as on a real channel
 (``socketcan``/``vcan0``): the loop's process then holds nothing but the loop, so no other
 thread takes the interpreter lock from it. The default bus is the ``seqpacket`` interface
-(drivers/seqpacket.py), a Unix-socket bus private to this dry run that needs no set-up.
+(drivers/seqpacket/), a Unix-socket bus private to this dry run that needs no set-up.
 The command starts the rig unless ``--external-rig`` says one is already running. On
 python-can's in-process ``virtual`` bus (``--interface virtual``) the rig runs in a thread
 of this process instead (fine in lockstep; in real time it competes with the loop). Afterwards the
@@ -54,7 +54,7 @@ from harness.signals.peaks import Peaks, run_peaks
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 from harness.simulation.twin import run_rig_twin
 
-#: The python-can interface (drivers/seqpacket.py) of the default dry run: the rig runs in its own
+#: The python-can interface (drivers/seqpacket/) of the default dry run: the rig runs in its own
 #: process, on a Unix-socket bus that needs no set-up.
 PRIVATE_BUS_INTERFACE = "seqpacket"
 RIG_APPEAR_TIMEOUT_S = 60.0
