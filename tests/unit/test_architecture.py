@@ -2,7 +2,8 @@
 
 - ``drivers/`` imports nothing from ``harness/``: the drivers know CAN and units, not the
   profile, the controller or the supervisor (DESIGN.md, "one direction").
-- No two modules import each other, even inside a function: the import graph has no cycle.
+- No two modules import each other, even inside a function or only for a type: the import
+  graph has no cycle.
   An import of a package's module counts as an import of the package too, since Python runs
   the package's ``__init__`` first (``harness.recording.strict_json`` runs the recording
   package's, which starts the recorder's modules).
@@ -212,6 +213,13 @@ def with_packages_run_first(graph: dict[str, set[str]]) -> dict[str, set[str]]:
 def test_the_import_graph_has_no_cycle() -> None:
     cycles = import_cycles(with_packages_run_first(project_imports(type_checking=False)))
     assert not cycles, f"modules that import each other (directly or round a ring): {cycles}"
+
+
+def test_no_ring_either_through_imports_made_for_a_type() -> None:
+    # An import under ``if TYPE_CHECKING:`` runs no code, but a ring kept for a type still makes
+    # each module unreadable without the other (report/build.py and report/summary.py were one).
+    cycles = import_cycles(project_imports(type_checking=True))
+    assert not cycles, f"modules that import each other, counting imports for types: {cycles}"
 
 
 #: Layers with a rule of their own: a module may import these only from the layers named.
