@@ -48,7 +48,8 @@ import numpy as np  # noqa: E402
 
 from harness.profile import Profile, load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
-from harness.runs.simulate import StudyOptions, run_study  # noqa: E402
+from harness.runs.options import StudyOptions  # noqa: E402
+from harness.runs.simulate import run_study
 from harness.signals.peaks import Peaks, reduction_pct  # noqa: E402
 
 sys.path.insert(0, str(REPO / "benchmarks"))

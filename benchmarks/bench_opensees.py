@@ -5,7 +5,7 @@ profile values and the same processed table acceleration, and the two are compar
 on peaks and on speed.
 
 The case: ``profiles/eight_story.yaml`` (SPEC 6a), PASSIVE (bearings only, no actuator
-force), El Centro 1940 NS processed by ``harness.runs.simulate.prepare_motion`` exactly as
+force), El Centro 1940 NS processed by ``harness.runs.options.prepare_motion`` exactly as
 ``harness simulate --record el_centro --pga 0.3 --time-scale 1 --duration 30`` does
 (cut, scaled to 0.3 g, baseline-corrected; 0.01 s samples, linear between them).
 
@@ -86,7 +86,7 @@ from harness.model.building import GRAVITY_M_S2, BuildingConfig, fixed_base_mode
 from harness.model.plant import Plant, TableMotion
 from harness.motions import GroundMotion
 from harness.profile import Profile, load_profile
-from harness.runs.simulate import StudyOptions, prepare_motion
+from harness.runs.options import StudyOptions, prepare_motion
 from harness.signals.peaks import peak_responses
 from harness.simulation.case import SamplingSettings, run_case
 

@@ -395,7 +395,7 @@ def check_run_length(profile, args: argparse.Namespace) -> None:
 
 
 def study_options(args: argparse.Namespace, **extra):
-    from harness.runs.simulate import StudyOptions
+    from harness.runs.options import StudyOptions
 
     return StudyOptions(
         record=args.record, records_dir=args.records_dir, pga_g=args.pga, time_scale=args.time_scale,

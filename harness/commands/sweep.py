@@ -109,7 +109,8 @@ def _count(text: str) -> int:
 
 def simulate_case(profile: Profile, options: dict[str, Any]) -> SimulatedCase:
     """One case of a sweep: ``harness simulate``'s own ``run_study``, its peaks and integration time."""
-    from harness.runs.simulate import StudyOptions, run_study
+    from harness.runs.options import StudyOptions
+    from harness.runs.simulate import run_study
     from harness.sweep.worker import SimulatedCase
 
     result = run_study(profile, StudyOptions(**options))

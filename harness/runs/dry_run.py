@@ -37,19 +37,15 @@ from harness.loop.tick import ControlTick
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
 from harness.motions import GroundMotion
+from harness.motions.summary import motion_facts
 from harness.paths import LOG_DIR
 from harness.profile import Profile
 from harness.recording import load_run
 from harness.recording.runfolder import check_log_dir
 from harness.rig.truth import truth_metadata, truth_summary
+from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, run_session
-from harness.runs.simulate import (
-    StudyOptions,
-    motion_facts,
-    prepare_motion,
-    resolve_profile,
-)
 from harness.signals.peaks import Peaks, run_peaks
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 from harness.simulation.twin import run_rig_twin

@@ -46,8 +46,8 @@ from harness.profile import Profile
 from harness.recording import load_run
 from harness.recording.metadata import environment, write_json_atomic
 from harness.runs.dry_run import private_bus, serving_virtual_rig
+from harness.runs.options import prepare_motion
 from harness.runs.session import SessionResult, SessionSettings, run_session
-from harness.runs.simulate import prepare_motion
 from harness.signals.columns import FORCE_COMMAND, FORCE_MEASURED, TIME
 
 Condition = Literal["free", "blocked"]

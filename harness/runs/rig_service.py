@@ -26,7 +26,7 @@ from harness.errors import EXPECTED_ERRORS, BusError
 from harness.model.warmup import warm_up
 from harness.profile import Profile, load_profile
 from harness.rig.virtual_rig import VirtualRig
-from harness.runs.simulate import StudyOptions, prepare_motion, resolve_profile
+from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 
 #: How often the serving thread checks for the stop and prints the rig's journal (s).
 JOURNAL_PERIOD_S = 0.1

@@ -45,7 +45,7 @@ class SimulatedCase:
 
 
 #: ``simulate(profile, study_options) -> SimulatedCase``: ``study_options`` are the keyword
-#: arguments of ``harness.runs.simulate.StudyOptions``.
+#: arguments of ``harness.runs.options.StudyOptions``.
 Simulate = Callable[[Profile, dict[str, Any]], SimulatedCase]
 
 

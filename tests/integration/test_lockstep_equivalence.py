@@ -25,7 +25,8 @@ from harness.control.factory import make_controller
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig, SensorsConfig
 from harness.rig.virtual_rig import RigParts, VirtualRig
-from harness.runs.simulate import StudyOptions, prepare_motion, run_study
+from harness.runs.options import StudyOptions, prepare_motion
+from harness.runs.simulate import run_study
 from harness.signals.peaks import peak_responses
 from tests.conftest import PROFILES
 

@@ -24,7 +24,7 @@ from harness.loop.runner import ControlLoop
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile
 from harness.rig.virtual_rig import VirtualRig
-from harness.runs.simulate import StudyOptions, prepare_motion
+from harness.runs.options import StudyOptions, prepare_motion
 from harness.safety.supervisor import Supervisor
 
 RATE_HZ = 500.0

@@ -17,7 +17,7 @@ from harness.config.input_limits import MIN_RUN_SAMPLES
 from harness.errors import ProfileError, RecordError
 from harness.motions.config import SYNTHETIC_DT_S, load_motion
 from harness.profile import load_profile
-from harness.runs.simulate import StudyOptions, resolve_profile
+from harness.runs.options import StudyOptions, resolve_profile
 from tests.conftest import PROFILES
 
 RIG = PROFILES / "nceer_4dof.yaml"
