@@ -46,10 +46,11 @@ sys.path.insert(0, str(REPO))
 
 import numpy as np  # noqa: E402
 
-from harness.peaks import Peaks, reduction_pct  # noqa: E402
 from harness.profile import Profile, load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
-from harness.runs.simulate import StudyOptions, run_study  # noqa: E402
+from harness.runs.options import StudyOptions  # noqa: E402
+from harness.runs.simulate import run_study
+from harness.signals.peaks import Peaks, reduction_pct  # noqa: E402
 
 sys.path.insert(0, str(REPO / "benchmarks"))
 from rig_table import PREDICTED as REDUCTIONS  # noqa: E402  (the same rows as the source's table)

@@ -33,7 +33,7 @@ sys.path.insert(0, str(REPO))
 
 from harness.profile import load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
-from harness.runs.simulate import StudyOptions  # noqa: E402
+from harness.runs.options import StudyOptions  # noqa: E402
 
 RATES_HZ = (250.0, 500.0, 1000.0)
 
@@ -77,7 +77,7 @@ def bare_loop(rate_hz: float, duration_s: float) -> dict:
     the loop measures its ticks (``time.thread_time`` around the body), here around nothing:
     the floor of that measurement.
     """
-    from harness.scheduler import FixedRateScheduler
+    from harness.realtime.scheduler import FixedRateScheduler
 
     scheduler = FixedRateScheduler(1.0 / rate_hz, 200e-6)
     n = int(duration_s * rate_hz)

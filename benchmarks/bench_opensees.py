@@ -5,7 +5,7 @@ profile values and the same processed table acceleration, and the two are compar
 on peaks and on speed.
 
 The case: ``profiles/eight_story.yaml`` (SPEC 6a), PASSIVE (bearings only, no actuator
-force), El Centro 1940 NS processed by ``harness.runs.simulate.prepare_motion`` exactly as
+force), El Centro 1940 NS processed by ``harness.runs.options.prepare_motion`` exactly as
 ``harness simulate --record el_centro --pga 0.3 --time-scale 1 --duration 30`` does
 (cut, scaled to 0.3 g, baseline-corrected; 0.01 s samples, linear between them).
 
@@ -34,7 +34,7 @@ OpenSees: a 2D model (ndm 2, ndf 3), one node per level, all at the origin:
 
 Peaks (SPEC 5: story drifts, absolute floor and base-mat accelerations, sliding
 displacement) are taken on both sides at the same instants, the controller sample
-times k / rate, by the same function (``harness.peaks.peak_responses``).
+times k / rate, by the same function (``harness.signals.peaks.peak_responses``).
 
 Speed: the analysis time of each side (median of --repeat runs after one warm-up,
 imports, profile and record loading excluded: our plant plus ``run_case``;
@@ -85,9 +85,9 @@ from harness.model.bearing import BearingConfig
 from harness.model.building import GRAVITY_M_S2, BuildingConfig, fixed_base_modes
 from harness.model.plant import Plant, TableMotion
 from harness.motions import GroundMotion
-from harness.peaks import peak_responses
 from harness.profile import Profile, load_profile
-from harness.runs.simulate import StudyOptions, prepare_motion
+from harness.runs.options import StudyOptions, prepare_motion
+from harness.signals.peaks import peak_responses
 from harness.simulation.case import SamplingSettings, run_case
 
 PROFILE = REPO / "profiles" / "eight_story.yaml"
@@ -113,7 +113,7 @@ class SideResult:
     Attributes
     ----------
     peaks : dict
-        Flat peaks (``harness.peaks.Peaks.flatten``), SI: m and m/s^2.
+        Flat peaks (``harness.signals.peaks.Peaks.flatten``), SI: m and m/s^2.
     analysis_s : float
         Wall time of the analysis (s), imports and loading excluded.
     details : dict

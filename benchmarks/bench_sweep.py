@@ -84,7 +84,7 @@ def measure(kind: str, study, cases, folder: Path) -> dict:
     startup_s = time.perf_counter() - started
     store = ResultStore(folder)
     try:
-        outcome = run_sweep(cases, engine, runner, store)
+        totals = run_sweep(cases, engine, runner, store)
     finally:
         engine.close()
     rows = store.rows()
@@ -92,9 +92,9 @@ def measure(kind: str, study, cases, folder: Path) -> dict:
     worker_s = statistics.fmean(row["wall_time_s"] for row in rows)
     integration_s = statistics.fmean(row["integration_s"] for row in rows)
     return {
-        "engine": kind, "cases": len(rows), "startup_s": startup_s, "sweep_s": outcome.wall_time_s,
-        "cases_per_s": len(rows) / outcome.wall_time_s, "integration_per_case_s": integration_s,
-        "worker_per_case_s": worker_s, "wall_per_case_s": outcome.wall_time_s / len(rows) * engine.workers,
+        "engine": kind, "cases": len(rows), "startup_s": startup_s, "sweep_s": totals.wall_time_s,
+        "cases_per_s": len(rows) / totals.wall_time_s, "integration_per_case_s": integration_s,
+        "worker_per_case_s": worker_s, "wall_per_case_s": totals.wall_time_s / len(rows) * engine.workers,
         "load_before": load_before, "load_after": os.getloadavg()[0],
     }
 

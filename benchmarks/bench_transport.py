@@ -37,7 +37,9 @@ sys.path.insert(0, str(REPO))
 
 import can  # noqa: E402
 
-import drivers  # noqa: E402,F401  registers the seqpacket interface
+from drivers import seqpacket  # noqa: E402
+
+seqpacket.register()  # can.Bus(interface="seqpacket") below, with or without the installed entry point
 
 STOP_ID = 0x7FF
 FRAME = can.Message(arbitration_id=0x30, is_extended_id=False, data=bytes(range(8)))

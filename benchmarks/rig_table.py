@@ -30,10 +30,11 @@ sys.path.insert(0, str(REPO))
 from rich.console import Console  # noqa: E402
 from rich.table import Table  # noqa: E402
 
-from harness.peaks import reduction_pct  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
-from harness.runs.simulate import StudyOptions, run_study  # noqa: E402
+from harness.runs.options import StudyOptions  # noqa: E402
+from harness.runs.simulate import run_study
+from harness.signals.peaks import reduction_pct  # noqa: E402
 
 #: Ideal control: the column that is a simulation, not a dry run.
 IDEAL = "ideal"

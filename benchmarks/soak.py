@@ -24,7 +24,7 @@ sys.path.insert(0, str(REPO))
 
 from harness.profile import load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
-from harness.runs.simulate import StudyOptions  # noqa: E402
+from harness.runs.options import StudyOptions  # noqa: E402
 
 WARM_UP_S = 30.0
 

@@ -14,16 +14,10 @@ they take plain arguments, as ``can.Bus`` does, and the harness adapts its profi
 - :mod:`drivers.bus`: :func:`~drivers.bus.open_bus` for any python-can interface; error-frame and send-failure accounting.
 - :mod:`drivers.reader` / :mod:`drivers.writer`: poll-in-the-tick readers and preallocated-frame writers, harness and rig side.
 - :mod:`drivers.link`: one call to a checked, open link with its reader and writer.
-- :mod:`drivers.seqpacket`: the ``seqpacket`` python-can interface (Unix SOCK_SEQPACKET hub).
+- :mod:`drivers.seqpacket`: the ``seqpacket`` python-can interface (Unix SOCK_SEQPACKET hub): channel, wire format, bus.
 
 Importing this package stays cheap (the harness imports :mod:`drivers.errors` everywhere):
-python-can is not imported here. The ``seqpacket`` interface is registered with python-can
-by the installed entry point, by importing :mod:`drivers.seqpacket` (which
-:mod:`drivers.bus` does), and here when python-can is already loaded, so
-``import can; import drivers; can.Bus(interface="seqpacket")`` works without the entry point.
+python-can is not imported here. python-can finds the ``seqpacket`` interface through the
+installed entry point; :func:`drivers.bus.open_bus` registers it before opening one where the
+entry point is not installed (:mod:`drivers.seqpacket` says how).
 """
-
-import sys as _sys
-
-if "can" in _sys.modules:
-    from drivers import seqpacket as _seqpacket  # noqa: F401  registers the seqpacket interface

@@ -20,7 +20,7 @@ from typing import Any
 
 import can
 
-import drivers.seqpacket  # noqa: F401  registers the seqpacket interface with python-can
+from drivers import seqpacket
 from drivers.errors import BusError
 
 SYS_NET = Path("/sys/class/net")
@@ -137,6 +137,7 @@ def open_bus(
     BusError
         Unknown interface, missing driver library, missing or down channel; says how to fix it.
     """
+    seqpacket.register()  # python-can knows it from the installed entry point; this, where that is not installed
     if interface == "socketcan":
         socketcan_preflight(channel)
     try:

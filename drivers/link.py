@@ -8,7 +8,7 @@ reader and writer around one shared :class:`~drivers.bus.BusHealth`.
 
 Like ``can.Bus``, these take plain arguments (interface, channel, bitrate, rates as a
 mapping, DBC path); the harness adapts its profile's ``can`` section to them
-(:mod:`harness.can_link`).
+(:mod:`harness.canbus.link`).
 """
 
 from __future__ import annotations

@@ -35,7 +35,9 @@ from typing import Any
 
 import yaml
 
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
+from harness.config.schema import build, internal, quantity, to_data
+from harness.config.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
 from harness.control.config import ControlConfig, SimulationConfig
 from harness.errors import ProfileError
 from harness.loop.config import LoopConfig
@@ -47,8 +49,6 @@ from harness.rig.config import RigConfig
 from harness.rig.truth import RigTruth, resolve_truth
 from harness.safety.config import SafetyConfig, check_config
 from harness.safety.weakening import Weakening, weakenings
-from harness.schema import build, internal, quantity, to_data
-from harness.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
 
 DEFAULT_PROFILE = PROFILE_DIR / "nceer_4dof.yaml"
 

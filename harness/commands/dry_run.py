@@ -81,7 +81,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.report.table_check import table_check
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import DryRunOptions, dry_run
-    from harness.runs.simulate import resolve_profile
+    from harness.runs.options import resolve_profile
 
     if args.reset_drive and not args.external_rig:
         console.print("[bold red]error:[/] --reset-drive resets the drive of a rig that already serves the channel: "

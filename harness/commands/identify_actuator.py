@@ -8,7 +8,6 @@ from collections.abc import Callable
 from rich.console import Console
 from rich.markup import escape
 
-from harness import input_limits as limits
 from harness.commands.options import (
     EXIT_STATUS,
     PROFILES_HELP,
@@ -21,12 +20,13 @@ from harness.commands.options import (
     wrap,
 )
 from harness.commands.output import compile_kernels, print_host_timing, print_outcome, print_timing
+from harness.config import input_limits as limits
 from harness.errors import ProfileError
 
 #: Peak force of the excitation (N): up to the largest rig actuator's rating (``rig.actuator.force_limit_N``
 #: <= 30 kN); the profile's ``safety.force.max_force_N`` then refuses anything above its own limit.
 AMPLITUDE = limits.NumberRange(0.0, 30_000.0, "N")
-#: Length of the excitation (s): the runs' bound (harness/input_limits.py).
+#: Length of the excitation (s): the runs' bound (harness/config/input_limits.py).
 EXCITATION_DURATION = limits.NumberRange(0.0, limits.MAX_DURATION_S, "s")
 #: Resolution of the estimate (Hz): 0.01 Hz is a Welch segment of 100 s, 10 Hz one of a tenth of a second.
 RESOLUTION = limits.NumberRange(0.01, 10.0, "Hz", low_open=False)

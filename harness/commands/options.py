@@ -11,9 +11,10 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
-from harness import input_limits as limits
+from harness.config import (
+    input_limits as limits,  #: Exit statuses of the commands that move (or would move) a table: run, dry-run, rig.
+)
 
-#: Exit statuses of the commands that move (or would move) a table: run, dry-run, rig.
 EXIT_STATUS = """\
 exit status:
   0  completed            3  tripped safely (force zeroed, drive disabled), or
@@ -55,7 +56,7 @@ def wrap(text: str) -> str:
     return textwrap.fill(text, width=78)
 
 
-# Ranges of the numeric options; harness/input_limits.py gives the reason for each bound.
+# Ranges of the numeric options; harness/config/input_limits.py gives the reason for each bound.
 #: ``--reset-drive`` of ``harness run`` and ``harness dry-run --external-rig``.
 RESET_DRIVE_HELP = (
     "before arming, send the operator's reset of the drive's latched fault (a watchdog fault after the previous run "
@@ -201,11 +202,11 @@ def json_file(text: str) -> str:
 def output_dir(text: str) -> str:
     """An argparse ``type=`` for a directory the command writes into (created if missing): writable, not a file.
 
-    Writability is tried (:func:`harness.writable.directory_problem`), so ``--log-dir /proc/1``
+    Writability is tried (:func:`harness.recording.writable.directory_problem`), so ``--log-dir /proc/1``
     is refused here, before a bus is opened or a rig started, and not by the run folder's
     ``mkdir`` once the run has begun.
     """
-    from harness.writable import directory_problem
+    from harness.recording.writable import directory_problem
 
     if not text.strip():
         raise argparse.ArgumentTypeError("found an empty path, expected a directory")
@@ -279,11 +280,11 @@ def check_loop_rate(profile, rate_given: bool, *, virtual_rig: bool) -> None:
     """Refuse a loop rate at which a run or a dry run could not arm, or not hold the loop, before anything starts.
 
     The range of ``--rate`` says what the parser accepts; a loop also needs its period short
-    enough for what the profile's safety settings expect of it (harness/input_limits.py
+    enough for what the profile's safety settings expect of it (harness/config/input_limits.py
     derives each):
 
-    - :data:`~harness.input_limits.STALL_BUDGET_PERIODS` periods within ``safety.run.max_stall_s``;
-    - :data:`~harness.input_limits.WATCHDOG_PERIODS` periods within ``rig.drive.watchdog_timeout_s``;
+    - :data:`~harness.config.input_limits.STALL_BUDGET_PERIODS` periods within ``safety.run.max_stall_s``;
+    - :data:`~harness.config.input_limits.WATCHDOG_PERIODS` periods within ``rig.drive.watchdog_timeout_s``;
     - the sensor frames' period (``can.sensor_rate_hz``, which ``--rate`` sets) within
       ``safety.sensors.max_sensor_age_s``: a sample is up to a period old when a tick reads it;
     - for the virtual rig of a dry run, a whole number of ``rig.physics_substep_s`` per period.
@@ -358,7 +359,7 @@ def _check_rig_substeps(profile, period_s: float, source: str, key: str | None) 
 
 
 def check_run_length(profile, args: argparse.Namespace) -> None:
-    """Refuse a run or simulation shorter than :data:`~harness.input_limits.MIN_RUN_SAMPLES` control periods.
+    """Refuse a run or simulation shorter than :data:`~harness.config.input_limits.MIN_RUN_SAMPLES` control periods.
 
     The record's own lower bound (as many samples of the record) is checked where the record is
     loaded (``harness.motions.config``). A profile without ``record.duration_s`` runs the whole
@@ -394,7 +395,7 @@ def check_run_length(profile, args: argparse.Namespace) -> None:
 
 
 def study_options(args: argparse.Namespace, **extra):
-    from harness.runs.simulate import StudyOptions
+    from harness.runs.options import StudyOptions
 
     return StudyOptions(
         record=args.record, records_dir=args.records_dir, pga_g=args.pga, time_scale=args.time_scale,

@@ -19,7 +19,6 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-from harness import strict_json
 from harness.commands.options import STDOUT
 
 #: Width of a command's output when it is not a terminal (characters): no line is wrapped or cut, and
@@ -76,6 +75,8 @@ def json_console(console: Console, json_path: str | None) -> Console:
 
 def write_json(path: str, document: Any) -> str:
     """Write ``document`` as indented JSON to the file ``path``, or to standard output for ``-``; where it went."""
+    from harness.recording import strict_json  # here: the command line starts without the recording package
+
     text = strict_json.dumps(document, indent=2) + "\n"  # NaN as null: valid JSON for every parser
     if path == STDOUT:
         sys.stdout.write(text)
@@ -94,7 +95,7 @@ def progress_bar(console: Console, enabled: bool):
 
 def compile_kernels(console: Console) -> None:
     """Compile the numba kernels up front; the spinner shows only when numba's cache does not hold them."""
-    from harness.kernel_cache import kernels_cached
+    from harness.model.kernel_cache import kernels_cached
     from harness.model.warmup import warm_up
 
     if kernels_cached():  # loaded from the cache in about half a second: nothing to announce

@@ -15,7 +15,7 @@ from harness.commands.options import (
     wrap,
 )
 from harness.commands.output import print_always, progress_bar
-from harness.input_limits import NumberRange
+from harness.config.input_limits import NumberRange
 
 EXAMPLES = """\
 examples:

@@ -22,7 +22,7 @@ from harness.commands.options import (
     wrap,
 )
 from harness.commands.output import compile_kernels
-from harness.interrupts import stop_on_signals
+from harness.realtime.interrupts import stop_on_signals
 
 
 def add_parser(sub) -> None:
@@ -59,8 +59,8 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.rig.truth import truth_summary
+    from harness.runs.options import resolve_profile
     from harness.runs.rig_service import serve_rig
-    from harness.runs.simulate import resolve_profile
 
     with stop_on_signals():
         profile = load_acknowledged(args, console)  # the rig serves the harness's profile: the same acknowledgement

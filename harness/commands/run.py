@@ -1,4 +1,8 @@
-"""``harness run``: the real rig, the same loop without the virtual rig."""
+"""``harness run``: the real rig, the same loop without the virtual rig.
+
+The options, the question before arming and what is printed; the run itself (its table
+link, which answers arm, the session) is :mod:`harness.runs.run`'s.
+"""
 
 from __future__ import annotations
 
@@ -38,25 +42,6 @@ if TYPE_CHECKING:
     from harness.profile import Profile
     from harness.runs.session import SessionResult
 
-#: What ``table.link: none`` means for a run, printed before arming.
-NO_TABLE_LINK = (
-    "table.link is none: the table controller is not on the CAN bus. The harness will not start or stop the "
-    "table: start it yourself once the run is RUNNING; record time follows the harness's clock, not the table's; "
-    "a trip cannot stop the table (stop_table trip actions are skipped), stop it at its own console."
-)
-
-
-def _announce_table_link(profile, console: Console):
-    """The run's table link (``table.link``): a :class:`CanTableLink`, or None with the consequence printed."""
-    from harness.loop.table_link import CanTableLink
-
-    if profile.table is None or profile.table.link == "can":
-        console.print("table: RIG_CONTROL start at RUNNING, stop at the end and on a trip; record time counts from the "
-                      "table controller's RIG_STATUS table_running (table.link: can)", highlight=False)
-        return CanTableLink(lockstep=False)
-    console.print(f"[bold yellow]{escape(NO_TABLE_LINK)}[/]", highlight=False)
-    return None
-
 
 def add_parser(sub) -> None:
     parser = sub.add_parser(
@@ -95,66 +80,42 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from pathlib import Path
 
     from harness.paths import LOG_DIR
-    from harness.runs.session import SessionSettings, run_session
-    from harness.runs.simulate import motion_facts, prepare_motion, resolve_profile
+    from harness.runs.options import resolve_profile
+    from harness.runs.run import answer_arms, arm_question, prepare_rig_run, run_on_rig, session_settings
 
     profile = load_acknowledged(args, console)
     profile = resolve_profile(profile, study_options(args, controller=args.controller, rate_hz=args.rate))
     check_loop_rate(profile, args.rate is not None, virtual_rig=False)
     check_run_length(profile, args)
-    motion = prepare_motion(profile)
-    rate = profile.control.rate_hz
-    can = profile.can_settings(args.interface, args.channel)
-    table_link = _announce_table_link(profile, console)
+    rig_run = prepare_rig_run(profile, args.interface, args.channel)
+    note = escape(rig_run.table_link_note)
+    console.print(note if rig_run.table_link is not None else f"[bold yellow]{note}[/]", highlight=False)
     if not args.yes:
         try:
             # escaped: "[y/N]" is text, not rich markup; soft wrap: one line, the answer typed after it
-            console.print(escape(arm_prompt(profile, motion, can.interface, can.channel, args.reset_drive)), end="",
-                          soft_wrap=True, highlight=False)
+            console.print(escape(arm_question(rig_run, args.reset_drive)), end="", soft_wrap=True, highlight=False)
             answer = console.input()
         except (EOFError, OSError):  # no terminal to answer from (stdin closed or captured): that is a no
             answer = ""
-        if answer.strip().lower() not in ("y", "yes"):
+        if not answer_arms(answer):
             console.print("not armed")
             return exit_codes.INPUT_ERROR
-    settings = SessionSettings(
-        kind="run", can=can, duration_s=motion.duration_s,
-        log_dir=Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
-        metadata={"record": motion_facts(motion), "table_link": "can" if table_link is not None else "none"},
-        # the table check needs record time to be the table's: only where the harness starts the table
-        table_record=motion if table_link is not None else None,
-        table_check_off="table.link is none: record time follows the harness's clock, not the table's",
-        reset_drive=args.reset_drive,
-    )
+    settings = session_settings(rig_run, Path(args.log_dir) if args.log_dir else LOG_DIR, show_console=not args.quiet,
+                                reset_drive=args.reset_drive)
     compile_kernels(console)
-    session = run_session(profile, settings, console=console, on_host_timing=print_host_timing(console),
-                          table_link=table_link)
-    print_run_peaks(console, profile, motion, session)
-    print_timing(console, session.loop.timing, rate)
+    session = run_on_rig(rig_run, settings, console=console, on_host_timing=print_host_timing(console))
+    print_run_peaks(console, profile, rig_run.motion, session)
+    print_timing(console, session.loop.timing, profile.control.rate_hz)
     print_outcome(console, session, weakened=profile.safety_weakened)
     return session.exit_code
 
 
-def arm_prompt(profile: Profile, motion: GroundMotion, interface: str, channel: str, reset_drive: bool = False) -> str:
-    """The question asked before arming: bus, controller, the record as the table will play it, the limits.
-
-    Plain text (the caller escapes it for rich: "[y/N]" is not markup).
-    """
-    verb = "Reset the drive's latched fault and arm" if reset_drive else "Arm"
-    return (
-        f"{verb} the actuator on {interface}:{channel} with {profile.control.controller}: record {motion.name}, "
-        f"PGA {motion.pga_g:.3f} g, time scale {motion.time_scale:g}, {motion.duration_s:.1f} s "
-        f"(max force {profile.safety.force.max_force_N / 1e3:g} kN, "
-        f"hard stroke {profile.safety.stroke.hard_limit_m * 1e3:g} mm)? [y/N] "
-    )
-
-
 def print_run_peaks(console: Console, profile: Profile, motion: GroundMotion, session: SessionResult) -> None:
     """The run's peak responses, as the dry run prints them, without a reference: what the run measured."""
-    from harness.peaks import run_peaks
     from harness.recording import load_run
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import record_span_s
+    from harness.signals.peaks import run_peaks
 
     if session.record_problem:
         console.print(f"[bold red]the recorder failed[/]: {escape(session.record_problem)}; the peaks below come "

@@ -28,7 +28,8 @@ from harness.report.text_table import TextTable
 
 if TYPE_CHECKING:
     from harness.profile import Profile
-    from harness.sweep.summary import Table
+    from harness.sweep.driver import SweepTotals
+    from harness.sweep.summary import ValueTable
     from harness.sweep.worker import SimulatedCase
 
 EXAMPLES = """\
@@ -108,7 +109,8 @@ def _count(text: str) -> int:
 
 def simulate_case(profile: Profile, options: dict[str, Any]) -> SimulatedCase:
     """One case of a sweep: ``harness simulate``'s own ``run_study``, its peaks and integration time."""
-    from harness.runs.simulate import StudyOptions, run_study
+    from harness.runs.options import StudyOptions
+    from harness.runs.simulate import run_study
     from harness.sweep.worker import SimulatedCase
 
     result = run_study(profile, StudyOptions(**options))
@@ -216,13 +218,13 @@ def _run_cases(args: argparse.Namespace, console: Console, study, cases, folder:
                     failed += row["outcome"] != "ok"
                     progress.update(task, advance=1, failed=failed)
 
-                outcome = run_sweep(todo.todo, engine, runner, store, advance)
+                totals = run_sweep(todo.todo, engine, runner, store, advance)
         finally:
             engine.close()
-        write_metadata(folder, study, engine, todo, outcome, started, report)
-        _print_outcome(console, outcome, engine.description)
-        status = _finish(args, console, folder, store, outcome)
-    return exit_codes.STOPPED if outcome.interrupted else status
+        write_metadata(folder, study, engine, todo, totals, started, report)
+        _print_totals(console, totals, engine.description)
+        status = _finish(args, console, folder, store, totals)
+    return exit_codes.STOPPED if totals.interrupted else status
 
 
 def _base(study):
@@ -271,23 +273,23 @@ def _progress(console: Console, quiet: bool) -> Progress:
     )
 
 
-def _print_outcome(console: Console, outcome, engine: str) -> None:
-    per_case = outcome.wall_time_s / outcome.ran if outcome.ran else 0.0
-    rate = outcome.ran / outcome.wall_time_s if outcome.wall_time_s else 0.0
-    console.print(f"ran {outcome.ran} cases in {outcome.wall_time_s:.1f} s on {engine}: {rate:.2f} cases/s "
-                  f"({per_case:.3f} s each), integration {outcome.integration_s:.1f} s of CPU")
-    if outcome.failed:
-        console.print(f"[yellow]{outcome.failed} cases failed[/]: their rows hold the error (outcome 'failed'); "
+def _print_totals(console: Console, totals: SweepTotals, engine: str) -> None:
+    per_case = totals.wall_time_s / totals.ran if totals.ran else 0.0
+    rate = totals.ran / totals.wall_time_s if totals.wall_time_s else 0.0
+    console.print(f"ran {totals.ran} cases in {totals.wall_time_s:.1f} s on {engine}: {rate:.2f} cases/s "
+                  f"({per_case:.3f} s each), integration {totals.integration_s:.1f} s of CPU")
+    if totals.failed:
+        console.print(f"[yellow]{totals.failed} cases failed[/]: their rows hold the error (outcome 'failed'); "
                       "--retry-failed runs them again")
-    if outcome.interrupted:
+    if totals.interrupted:
         console.print("[yellow]stopped by Ctrl-C[/]: the rows so far are kept; the same command goes on from there")
 
 
-def _finish(args: argparse.Namespace, console: Console, folder: Path, store, outcome) -> int:
+def _finish(args: argparse.Namespace, console: Console, folder: Path, store, totals: SweepTotals | None) -> int:
     """Where the results are (the outcome line, unless a report follows), and the report if asked."""
     report = bool(args.report) and (folder / "sweep.json").is_file()
-    if outcome is not None or (folder / "sweep.json").is_file():
-        failed = f"; {outcome.failed} cases failed" if outcome is not None and outcome.failed else ""
+    if totals is not None or (folder / "sweep.json").is_file():
+        failed = f"; {totals.failed} cases failed" if totals is not None and totals.failed else ""
         results = f"results: {folder}/cases.{store.format}" + (", cases.csv" if store.parquet else "") + failed
         if report or args.plan:
             console.print(results)
@@ -325,7 +327,7 @@ CONSOLE_ROWS = 15
 TEXT_COLUMNS = ("design", "record")
 
 
-def _text_table(table: Table) -> TextTable:
+def _text_table(table: ValueTable) -> TextTable:
     """A summary table for the console: at most :data:`CONSOLE_ROWS` rows, numbers to 3 significant figures.
 
     Rendered with :meth:`TextTable.to_rich`, its columns wrap their headings and split into

@@ -6,14 +6,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
-from harness.control.designs import ControllerDesign
-from harness.input_limits import (
+from harness.config.input_limits import (
     MAX_DELAY_S,
     MAX_RATE_HZ,
     MAX_STIFFNESS_SCALE,
     MIN_STIFFNESS_SCALE,
 )
-from harness.schema import quantity
+from harness.config.schema import quantity
+from harness.control.designs import ControllerDesign
 
 
 @dataclass(frozen=True)
@@ -22,7 +22,7 @@ class ControlConfig:
 
     controller: str = quantity(doc="name of the design used by default (a key of designs)")
     designs: Mapping[str, ControllerDesign] = quantity(doc="named controller designs")
-    # Bounds shared with the command line; harness/input_limits.py gives the reasons.
+    # Bounds shared with the command line; harness/config/input_limits.py gives the reasons.
     rate_hz: float = quantity(500.0, unit="Hz", gt=0, le=MAX_RATE_HZ, doc="controller sample rate f_s")
     transport_delay_s: float = quantity(
         0.0, unit="s", ge=0, le=MAX_DELAY_S, doc="further sensor-to-force delay in simulation"

@@ -13,6 +13,7 @@ from typing import Literal
 
 import numpy as np
 
+from harness.config.schema import quantity
 from harness.control.actuator_aware import (
     ActuatorModel,
     ActuatorOutputSMC,
@@ -25,7 +26,6 @@ from harness.control.controllers import Controller, PhiSMC, StateFeedbackSMC
 from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups
 from harness.errors import ModelError
 from harness.model.building import BuildingConfig, state_space
-from harness.schema import quantity
 
 DELTA_DOC = "sliding margin delta >= 0 in N kg s/m (SI, with P B = 1/m_b)"
 

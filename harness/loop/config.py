@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from harness.loop.realtime import RealtimeConfig
-from harness.schema import quantity
+from harness.config.schema import quantity
+from harness.realtime.host import RealtimeConfig
 
 
 @dataclass(frozen=True)

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.errors import SafetyError
+from harness.realtime.scheduler import FixedRateScheduler
 from harness.safety.operator_detectors import HOST_TIMING_REMEDIES
-from harness.scheduler import FixedRateScheduler
 
 
 class HostTimingRefused(SafetyError):
@@ -110,7 +110,7 @@ def measure_host_timing(
     duration_s : float
         How long to measure (s).
     clock, sleep : callable
-        As for :class:`~harness.scheduler.FixedRateScheduler`.
+        As for :class:`~harness.realtime.scheduler.FixedRateScheduler`.
     poll : callable, optional
         Called at every wake-up: drain the bus as the loop would, so frames do not pile up.
     """

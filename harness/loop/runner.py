@@ -19,14 +19,14 @@ from dataclasses import dataclass, field
 from harness.errors import SafetyError
 from harness.loop.config import LoopConfig
 from harness.loop.operator import OperatorSignals
-from harness.loop.realtime import apply_realtime, restore_realtime
 from harness.loop.status import LoopStatus  # re-exported: it lived here before
 from harness.loop.tick import ControlTick
 from harness.loop.timing import TimingStats
+from harness.realtime.host import apply_realtime, restore_realtime
+from harness.realtime.scheduler import FixedRateScheduler
 from harness.recording.layout import Outcome
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand
-from harness.scheduler import FixedRateScheduler
 
 _FINAL = (State.DONE, State.TRIPPED)
 #: The outcome of a run that ended in each final state (any other: ``stopped``).

@@ -16,22 +16,22 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from harness import rowlayout as layout
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
 from harness.loop.trip_outputs import TripOutputs
-from harness.memory import float_view
+from harness.realtime.memory import float_view
 from harness.safety.events import bit
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
+from harness.signals import columns as layout
 
 if TYPE_CHECKING:
     from drivers.link import HarnessLink
     from harness.loop.status import LoopStatus
 
-# Positions in the row (harness.rowlayout.CONTROL_ROW) of what the tick records, looked up by
+# Positions in the row (harness.signals.columns.CONTROL_ROW) of what the tick records, looked up by
 # name once, at import. Module constants: a store through one costs what a literal index costs
 # (a global load), less than through an instance attribute.
 _AT = layout.CONTROL_ROW_INDEX

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.memory import float_view, prefaulted_zeros
+from harness.realtime.memory import float_view, prefaulted_zeros
 
 
 class TimingStats:

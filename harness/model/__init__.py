@@ -1,10 +1,10 @@
 """The building, its bearings, the rig's hydraulics and the compiled kernel that integrates them.
 
 Importing the package first drops numba's cached kernels if any kernel source changed
-(:func:`harness.kernel_cache.drop_stale_kernels`): numba alone would keep a caller
+(:func:`harness.model.kernel_cache.drop_stale_kernels`): numba alone would keep a caller
 compiled against an older callee in another file.
 """
 
-from harness.kernel_cache import drop_stale_kernels
+from harness.model.kernel_cache import drop_stale_kernels
 
 drop_stale_kernels()

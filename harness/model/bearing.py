@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from harness.schema import quantity
+from harness.config.schema import quantity
 
 # Indices into the packed parameter array.
 MU_MAX, MU_DELTA, A_MU, WEIGHT, ALPHA, BETA, GAMMA, ETA, YIELD = range(9)

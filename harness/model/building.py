@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from harness.schema import quantity
+from harness.config.schema import quantity
 
 GRAVITY_M_S2 = 9.80665
 

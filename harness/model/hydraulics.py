@@ -48,7 +48,7 @@ from typing import Literal
 import numba
 import numpy as np
 
-from harness.schema import quantity
+from harness.config.schema import quantity
 
 # ------------------------------------------------------------ packed parameters
 #: Flags: the table is a servo-hydraulic platform; the control actuator is servo-hydraulic;

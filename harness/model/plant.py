@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from drivers.measurements import Measurements
-from harness import rowlayout as layout
 from harness.model import hydraulics as hy
 from harness.model.bearing import BearingConfig, friction_force
 from harness.model.building import (
@@ -21,6 +20,7 @@ from harness.model.building import (
     state_space,
 )
 from harness.model.integrator import advance, default_atol, derivative, make_work, table_drive, table_state
+from harness.signals import columns as layout
 
 
 @dataclass(frozen=True)
@@ -210,7 +210,7 @@ class Plant:
         Returns
         -------
         dict
-            The columns :func:`harness.rowlayout.plant_columns` names, in that order (SI):
+            The columns :func:`harness.signals.columns.plant_columns` names, in that order (SI):
             table motion, base-mat motion and absolute acceleration, sliding displacement
             and velocity, drifts, absolute floor accelerations, friction force, nu.
         """

@@ -19,8 +19,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from harness.config.input_limits import MAX_SEED
 from harness.errors import RecordError
-from harness.input_limits import MAX_SEED
 
 #: Environment variable that names the records directory.
 ENV_RECORDS_DIR = "HARNESS_RECORDS_DIR"

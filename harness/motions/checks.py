@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.config.input_limits import MIN_RUN_SAMPLES
 from harness.errors import RecordError
-from harness.input_limits import MIN_RUN_SAMPLES
 from harness.motions.accel_units import G_M_S2, accel_factor
 
-#: Fewest samples a record may have, and a run of it cover (harness/input_limits.py says why).
+#: Fewest samples a record may have, and a run of it cover (harness/config/input_limits.py says why).
 MIN_SAMPLES = MIN_RUN_SAMPLES
 #: Largest |acceleration| a record may contain (g); larger values mean a unit mistake.
 MAX_ABS_ACCEL_G = 10.0

@@ -14,14 +14,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from harness.errors import RecordError
-from harness.input_limits import (
+from harness.config.input_limits import (
     MAX_DURATION_S,
     MAX_PGA_G,
     MAX_SEED,
     MAX_TIME_SCALE,
     MIN_TIME_SCALE,
 )
+from harness.config.schema import quantity
+from harness.errors import RecordError
 from harness.motions.accel_units import normalize_accel_unit
 from harness.motions.catalog import (
     CATALOG,
@@ -34,7 +35,6 @@ from harness.motions.checks import MIN_SAMPLES
 from harness.motions.loaders import RawRecord, load_record
 from harness.motions.processing import GroundMotion, process_record
 from harness.motions.synthetic import synthetic_record
-from harness.schema import quantity
 
 #: Length of a run when neither the profile nor the CLI gives one (s, processed time).
 DEFAULT_SYNTHETIC_DURATION_S = 30.0
@@ -50,7 +50,7 @@ class RecordConfig:
 
     name: str = quantity("synthetic", doc="catalog name, file name or path, or synthetic / synthetic:SEED")
     records_dir: str | None = quantity(None, doc="directory of the real records (relative to the profile)")
-    # Bounds shared with the command line; harness/input_limits.py gives the reasons.
+    # Bounds shared with the command line; harness/config/input_limits.py gives the reasons.
     pga_g: float | None = quantity(
         None, unit="g", gt=0, le=MAX_PGA_G, doc="target peak table acceleration (g); none: the record's"
     )

@@ -12,9 +12,9 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from harness.config.schema import quantity
 from harness.errors import RecordError
 from harness.motions.processing import GroundMotion
-from harness.schema import quantity
 
 
 @dataclass(frozen=True)

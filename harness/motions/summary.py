@@ -1,4 +1,5 @@
-"""A short, spectrum-relevant summary of a ground motion, for ``harness records``.
+"""A short, spectrum-relevant summary of a ground motion, for ``harness records``; and the
+facts of a record that run folders and ``harness simulate --json`` keep (:func:`motion_facts`).
 
 - Peak values PGA (g), PGV (m/s), PGD (m) of the processed triple.
 - Arias intensity ``I_a = pi / (2 g) * integral a^2 dt`` (m/s) and the 5-95 %
@@ -104,3 +105,20 @@ def summarize(motion: GroundMotion, *, smoothing_hz: float = 0.1) -> MotionSumma
         predominant_period_s=predominant_period(accel, motion.dt_s, smoothing_hz),
         mean_period_s=mean_period(accel, motion.dt_s),
     )
+
+
+def motion_facts(motion: GroundMotion) -> dict:
+    """The facts of a record that a run folder's metadata and ``harness simulate --json`` keep, by key.
+
+    Name, PGA (g), PGV (m/s), PGD (m), time scale, duration (s) and the share of Arias
+    intensity the cut left out.
+    """
+    return {
+        "name": motion.name,
+        "pga_g": motion.pga_g,
+        "pgv_m_s": motion.pgv_m_s,
+        "pgd_m": motion.pgd_m,
+        "time_scale": motion.time_scale,
+        "duration_s": motion.duration_s,
+        "arias_left_out": motion.arias_left_out,
+    }

@@ -14,7 +14,7 @@ from harness.recording.reader import RunData, case_folders, load_run, load_runs
 from harness.recording.ring import RecordingError
 from harness.recording.runfolder import RunFolder
 from harness.recording.simcase import write_simulation_case
-from harness.rowlayout import canonical_columns, drift, floor_acceleration, unit_of
+from harness.signals.columns import canonical_columns, drift, floor_acceleration, unit_of
 
 __all__ = [
     "FORMAT_VERSION",

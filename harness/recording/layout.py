@@ -10,7 +10,7 @@ A run folder (one per run, under ``logs/``) contains:
     The fully resolved profile the run used (plain data, SI values).
 ``signals.csv``
     One row per loop tick; a one-line header of column names whose suffix names the
-    unit (``t_s``, ``drift_1_m``, ``force_command_N``). :mod:`harness.rowlayout` defines
+    unit (``t_s``, ``drift_1_m``, ``force_command_N``). :mod:`harness.signals.columns` defines
     the names and the order each kind of run writes them in.
 ``events.jsonl``
     One JSON object per line: ``{"t_s", "wall_time", "kind", "name", "detail"}``.

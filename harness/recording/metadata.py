@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from harness import strict_json
+import harness.recording.strict_json as strict_json
 from harness.recording.layout import RunFolderError
 
 #: Distributions whose versions every run records.
@@ -115,7 +115,7 @@ def write_json_atomic(path: Path, data: Mapping[str, Any]) -> None:
         Final file name.
     data : mapping
         JSON-serialisable data (:func:`json_default` converts numpy values, paths and times);
-        a non-finite float is written ``null`` (:mod:`harness.strict_json`).
+        a non-finite float is written ``null`` (:mod:`harness.recording.strict_json`).
 
     Raises
     ------

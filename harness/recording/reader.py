@@ -22,7 +22,7 @@ from harness.recording.layout import (
     METADATA_FILE,
     RunFolderError,
 )
-from harness.rowlayout import count_stories
+from harness.signals.columns import count_stories
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ import can
 import numpy as np
 
 from harness.errors import HarnessError
-from harness.memory import float_view, prefaulted_zeros
+from harness.realtime.memory import float_view, prefaulted_zeros
 
 #: Bit layout of :attr:`FrameRing.flags`.
 FLAG_EXTENDED = 1

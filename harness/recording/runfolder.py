@@ -106,7 +106,7 @@ class RunFolder:
         resolved_profile_data : mapping
             The fully resolved profile as plain data; written to ``profile.yaml``.
         columns : sequence of str
-            Signal column names (see :mod:`harness.rowlayout`), ``t_s`` first.
+            Signal column names (see :mod:`harness.signals.columns`), ``t_s`` first.
         metadata : mapping, optional
             Extra metadata, e.g. ``total_weight_N``, ``stroke_soft_limit_m``,
             ``stroke_hard_limit_m``, ``force_limit_N``, ``record``, ``controller``, ``case``.
@@ -278,7 +278,7 @@ def check_log_dir(log_dir: Path | str) -> None:
     RunFolderError
         Saying what is wrong with it (a file, below a file, not writable) and what was expected.
     """
-    from harness.writable import directory_problem
+    from harness.recording.writable import directory_problem
 
     problem = directory_problem(log_dir)
     if problem is not None:

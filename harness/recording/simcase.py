@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from harness import strict_json
+import harness.recording.strict_json as strict_json
 from harness.recording.layout import (
     EVENTS_FILE,
     FORMAT_NAME,
@@ -39,7 +39,7 @@ from harness.recording.metadata import (
     write_profile,
 )
 from harness.recording.writer import format_rows, row_format
-from harness.rowlayout import TIME
+from harness.signals.columns import TIME
 
 _CHUNK_ROWS = 4096
 
@@ -63,7 +63,7 @@ def write_simulation_case(
     name : str
         Case name, e.g. ``"passive"`` or ``"controlled"``; also stored as ``metadata["case"]``.
     columns : sequence of str
-        Column names, ``t_s`` first (see :mod:`harness.rowlayout`).
+        Column names, ``t_s`` first (see :mod:`harness.signals.columns`).
     arrays : mapping of str to ndarray, or ndarray of shape (n, len(columns))
         The time histories (SI units), one equal-length 1-D array per column.
     metadata : mapping

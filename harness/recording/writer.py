@@ -29,7 +29,7 @@ from typing import Any, TextIO
 import can
 import numpy as np
 
-from harness import strict_json
+import harness.recording.strict_json as strict_json
 from harness.recording.metadata import json_default
 from harness.recording.ring import FrameRing, RowRing
 

@@ -23,7 +23,7 @@ _EXPORTS = {
     "PeakRow": "harness.report.peak_table",
     "PeakTable": "harness.report.peak_table",
     "PlotFile": "harness.report.figure",
-    "ReportResult": "harness.report.build",
+    "ReportResult": "harness.report.result",
     "build_report": "harness.report.build",
     "comparison_table": "harness.report.tables",
     "distinct_labels": "harness.report.labels",

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.peaks import Peaks
 from harness.report.peak_table import PERCENT_DIGITS, PeakRow, PeakTable
 from harness.report.quantities import REPORT_WORDING, Quantity, response_quantities
+from harness.signals.peaks import Peaks
 
 #: The statistics over the records of each controller's reductions, in column order.
 STATISTICS = ("mean", "min", "max")

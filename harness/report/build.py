@@ -22,7 +22,6 @@ harness/report/table_check.py), says so; its reductions are then withheld, or fl
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from harness.recording.layout import METADATA_FILE
@@ -30,12 +29,12 @@ from harness.recording.reader import RunData, case_folders, load_runs
 from harness.report.context import controller_table, record_table, timing_table
 from harness.report.drive_faults import fault_text
 from harness.report.events_table import event_tables
-from harness.report.figure import PlotFile
 from harness.report.html import report_html
 from harness.report.labels import file_slug, with_labels
 from harness.report.peak_table import PeakTable
 from harness.report.plots import PLOT_NAMES, PLOTS, PlotOptions
 from harness.report.reference import reference_tables, target_motion_table
+from harness.report.result import ReportResult
 from harness.report.summary import summary_text
 from harness.report.table_check import run_table_check
 from harness.report.tables import comparison_table, pair_table, runs_table
@@ -48,44 +47,7 @@ REPORT_HTML = "report.html"
 SUMMARY_TXT = "summary.txt"
 MAX_COMPARISONS = 6
 
-__all__ = ["ReportResult", "build_report", "load_labelled", "summary_text"]
-
-
-@dataclass
-class ReportResult:
-    """What :func:`build_report` produced.
-
-    Attributes
-    ----------
-    out_dir : Path
-        Where the files are.
-    html_path : Path
-        The self-contained page.
-    plots : list of PlotFile
-        Written PNGs (plots without data are skipped).
-    tables : list of PeakTable
-        Peak, pair, reference and comparison tables.
-    context : list of TextTable
-        Record, target against achieved table motion, controller, loop timing, events and interlocks.
-    runs : list of RunData
-        The runs read, each with its report label (:attr:`RunData.label`).
-    table_files : list of Path
-        One CSV per table (``table_1_peak_responses.csv`` ...), for spreadsheets and MATLAB.
-    warnings : list of str
-        Incomplete runs, torn files, mismatched records ...
-    summary : str
-        Plain-text summary (``summary.txt``; the console prints it at its own width).
-    """
-
-    out_dir: Path
-    html_path: Path
-    plots: list[PlotFile] = field(default_factory=list)
-    tables: list[PeakTable] = field(default_factory=list)
-    context: list[TextTable] = field(default_factory=list)
-    runs: list[RunData] = field(default_factory=list)
-    table_files: list[Path] = field(default_factory=list)
-    warnings: list[str] = field(default_factory=list)
-    summary: str = ""
+__all__ = ["build_report", "load_labelled"]
 
 
 def _same_record(a: RunData, b: RunData) -> bool:

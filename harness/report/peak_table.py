@@ -7,7 +7,7 @@ numbers, and each rendering formats them the same way: rich (the console), plain
 HTML and CSV. The tables themselves are built in :mod:`harness.report.tables`.
 
 A percent-reduction column (:attr:`PeakTable.reduction_columns`) shows :data:`NO_REDUCTION`
-where it has no value: :func:`harness.peaks.reduction_pct` found no comparable reference, or
+where it has no value: :func:`harness.signals.peaks.reduction_pct` found no comparable reference, or
 :func:`without_reductions` took them out (a run that did not play its record). The CSV
 leaves such a cell empty, as it does every absent value, so it stays a column of numbers.
 """

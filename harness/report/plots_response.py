@@ -16,14 +16,14 @@ import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
 
-from harness.peaks import run_peaks
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend, peak_of, record_time, small_runs
 from harness.report.plots_control import head_panels, record_panels, title_panel, usable_groups
 from harness.report.record_groups import RecordGroup
 from harness.report.reference import passive_reference
-from harness.rowlayout import drift
+from harness.signals.columns import drift
+from harness.signals.peaks import run_peaks
 
 
 def drift_height_px(n_stories: int, n_records: int = 1) -> int:

@@ -1,4 +1,4 @@
-"""The rows of every peak table: which quantities of :class:`~harness.peaks.Peaks`, in what order, how shown.
+"""The rows of every peak table: which quantities of :class:`~harness.signals.peaks.Peaks`, in what order, how shown.
 
 One catalogue serves the console tables of ``harness simulate`` and ``harness dry-run``
 (:func:`response_quantities` in :data:`CONSOLE_WORDING`) and the report's tables
@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from harness.peaks import Peaks, reduction_pct
+from harness.signals.peaks import Peaks, reduction_pct
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ class Quantity:
         return None if value is None else value * self.scale
 
     def reduction(self, passive: Peaks, controlled: Peaks) -> float | None:
-        """Percent reduction passive -> controlled (:func:`harness.peaks.reduction_pct`); None if not comparable."""
+        """Percent reduction passive -> controlled (:func:`harness.signals.peaks.reduction_pct`); None if not comparable."""
         return reduction_pct(self.si_value(passive), self.si_value(controlled)) if self.comparable else None
 
 

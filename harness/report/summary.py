@@ -8,10 +8,8 @@ instead of breaking lines (:class:`~harness.report.text_table.TextTable`).
 from __future__ import annotations
 
 import textwrap
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from harness.report.build import ReportResult
+from harness.report.result import ReportResult
 
 
 def _run_lines(result: ReportResult, width: int | None) -> list[str]:

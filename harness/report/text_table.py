@@ -7,7 +7,8 @@ do not fit they are split into blocks, each repeating the leading key columns (t
 and its unit), so no column ever lands on a line of its own. :meth:`TextTable.to_rich` renders
 the same blocks as rich tables for the console: a cell is never cut to an ellipsis, it
 wraps. The peak tables (:class:`~harness.report.peak_table.PeakTable`), the report's
-context tables and the sweep's summary tables render through it.
+context tables and the sweep's summary tables (the cells of a
+:class:`~harness.sweep.summary.ValueTable`) render through it.
 """
 
 from __future__ import annotations

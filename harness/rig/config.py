@@ -10,11 +10,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from harness.input_limits import MAX_SEED
+from harness.config.input_limits import MAX_SEED
+from harness.config.schema import quantity
 from harness.model.hydraulics import HydraulicActuatorConfig, TableConfig
 from harness.rig.faults import fault_id_for
 from harness.rig.truth import TruthConfig
-from harness.schema import quantity
 
 FaultKind = Literal[
     "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",

@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from harness.memory import prefaulted_zeros
 from harness.model.plant import Plant
+from harness.realtime.memory import prefaulted_zeros
 
 RIG_TIME, RECORD_TIME, FORCE, STATE = 0, 1, 2, 3
 

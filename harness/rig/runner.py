@@ -1,6 +1,6 @@
 """The rig's service loop: wall-clock ticks in real time, frame-driven in lockstep.
 
-Real time: a :class:`~harness.scheduler.FixedRateScheduler` wakes the rig at
+Real time: a :class:`~harness.realtime.scheduler.FixedRateScheduler` wakes the rig at
 the sensor rate against absolute deadlines, without the busy-wait spin (the rig
 shares two cores with the harness loop; a tick's lateness only delays frames, the
 physics stays on the sub-step grid). Lockstep: the loop blocks on the bus for up
@@ -15,7 +15,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
-from harness.scheduler import FixedRateScheduler
+from harness.realtime.scheduler import FixedRateScheduler
 
 
 def serve(rig, stop: threading.Event, poll_timeout_s: float = 0.002, sleep: Callable[[float], None] | None = None) -> None:

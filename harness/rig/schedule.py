@@ -1,6 +1,6 @@
 """When the rig publishes: message periods on the sub-step grid (real time) and per step (lockstep).
 
-Rates come from the profile's CAN section (:class:`~harness.can_config.CanConfig`).
+Rates come from the profile's CAN section (:class:`~harness.canbus.config.CanConfig`).
 Each period is rounded to whole physics sub-steps (at least one); a message is
 due when the rig's sub-step count reaches its next due count, which then moves on
 by one period (or past ``now`` when the rig fell behind, so nothing bursts).
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 
 MAX_CATCH_UP_S = 0.2
 

@@ -29,7 +29,7 @@ import numpy as np
 from drivers.codec import load_protocol
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from drivers.writer import RigWriter
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 from harness.errors import ModelError
 from harness.rig import inbox
 from harness.rig.actuator import make_actuator
@@ -79,7 +79,7 @@ class VirtualRig:
     clock : callable
         Wall clock (s) for the runner thread.
     can_config : CanConfig, optional
-        Message rates (real time); defaults of :class:`~harness.can_config.CanConfig`.
+        Message rates (real time); defaults of :class:`~harness.canbus.config.CanConfig`.
     """
 
     def __init__(

@@ -3,7 +3,7 @@
 By default the rig runs as a separate ``harness rig`` process, as on a real channel
 (``socketcan``/``vcan0``): the loop's process then holds nothing but the loop, so no other
 thread takes the interpreter lock from it. The default bus is the ``seqpacket`` interface
-(drivers/seqpacket.py), a Unix-socket bus private to this dry run that needs no set-up.
+(drivers/seqpacket/), a Unix-socket bus private to this dry run that needs no set-up.
 The command starts the rig unless ``--external-rig`` says one is already running. On
 python-can's in-process ``virtual`` bus (``--interface virtual``) the rig runs in a thread
 of this process instead (fine in lockstep; in real time it competes with the loop). Afterwards the
@@ -29,7 +29,7 @@ from pathlib import Path
 from drivers.link import HarnessLink
 from drivers.protocol_values import RigCommand
 from drivers.reader import Sample
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 from harness.control.factory import make_controller
 from harness.errors import BusError
 from harness.loop.table_link import CanTableLink
@@ -37,24 +37,20 @@ from harness.loop.tick import ControlTick
 from harness.model.plant import Plant, TableMotion
 from harness.model.warmup import warm_up
 from harness.motions import GroundMotion
+from harness.motions.summary import motion_facts
 from harness.paths import LOG_DIR
-from harness.peaks import Peaks, run_peaks
 from harness.profile import Profile
 from harness.recording import load_run
 from harness.recording.runfolder import check_log_dir
 from harness.rig.truth import truth_metadata, truth_summary
+from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, run_session
-from harness.runs.simulate import (
-    StudyOptions,
-    motion_facts,
-    prepare_motion,
-    resolve_profile,
-)
+from harness.signals.peaks import Peaks, run_peaks
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 from harness.simulation.twin import run_rig_twin
 
-#: The python-can interface (drivers/seqpacket.py) of the default dry run: the rig runs in its own
+#: The python-can interface (drivers/seqpacket/) of the default dry run: the rig runs in its own
 #: process, on a Unix-socket bus that needs no set-up.
 PRIVATE_BUS_INTERFACE = "seqpacket"
 RIG_APPEAR_TIMEOUT_S = 60.0
@@ -316,7 +312,7 @@ def serving_virtual_rig(
         The processed record (the in-process rig's table; the rig process prepares its own).
     external_rig : bool
     """
-    from harness.can_link import open_rig
+    from harness.canbus.link import open_rig
     from harness.rig.virtual_rig import VirtualRig
 
     rate_hz = profile.control.rate_hz

@@ -45,10 +45,10 @@ from harness.model.warmup import warm_up
 from harness.profile import Profile
 from harness.recording import load_run
 from harness.recording.metadata import environment, write_json_atomic
-from harness.rowlayout import FORCE_COMMAND, FORCE_MEASURED, TIME
 from harness.runs.dry_run import private_bus, serving_virtual_rig
+from harness.runs.options import prepare_motion
 from harness.runs.session import SessionResult, SessionSettings, run_session
-from harness.runs.simulate import prepare_motion
+from harness.signals.columns import FORCE_COMMAND, FORCE_MEASURED, TIME
 
 Condition = Literal["free", "blocked"]
 CONDITIONS: tuple[Condition, ...] = ("free", "blocked")

@@ -15,8 +15,8 @@ import sys
 
 from harness import exit_codes
 from harness.errors import EXPECTED_ERRORS
-from harness.interrupts import stop_on_signals
 from harness.profile import Profile
+from harness.realtime.interrupts import stop_on_signals
 from harness.runs.rig_service import serve_rig
 
 

@@ -2,7 +2,7 @@
 
 The CLI parses the arguments and calls :func:`run_rig_command`; this module does
 the rest: load the profile and record, open the bus (checked by
-:func:`harness.can_link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
+:func:`harness.canbus.link.open_rig`), serve the rig in a thread until Ctrl-C or the stop
 event, then stop cleanly: drive disabled and announced, bus shut down.
 
 The rig serves run after run. Each change it sees (the drive's state and fault, the
@@ -20,13 +20,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 from harness import exit_codes
-from harness.can_config import CanConfig
-from harness.can_link import open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_rig
 from harness.errors import EXPECTED_ERRORS, BusError
 from harness.model.warmup import warm_up
 from harness.profile import Profile, load_profile
 from harness.rig.virtual_rig import VirtualRig
-from harness.runs.simulate import StudyOptions, prepare_motion, resolve_profile
+from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 
 #: How often the serving thread checks for the stop and prints the rig's journal (s).
 JOURNAL_PERIOD_S = 0.1

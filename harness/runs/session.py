@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING
 
 from drivers.link import HarnessLink
 from harness import exit_codes
-from harness.can_config import CanConfig
-from harness.can_link import open_harness
-from harness.console import LiveConsole
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness
+from harness.console.live import LiveConsole
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
@@ -32,11 +32,11 @@ from harness.profile import Profile
 from harness.recording import RunFolder
 from harness.recording.layout import Outcome, RunKind
 from harness.recording.runfolder import check_log_dir
-from harness.rowlayout import CONTROL_ROW, PROTOCOL_STORIES
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
 from harness.safety.table_record import NO_RECORD
 from harness.safety.weakening import summary
+from harness.signals.columns import CONTROL_ROW, PROTOCOL_STORIES
 
 if TYPE_CHECKING:
     from harness.motions import GroundMotion

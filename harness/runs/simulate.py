@@ -1,50 +1,27 @@
 """``harness simulate``: passive and controlled cases of one profile and record, side by side.
 
-Everything a command needs between the profile and the simulator: the table motion
-with the command-line overrides applied, the controller with its design model, the
-sampling settings, and the results in the JSON layout of the issue tracker (SI).
+From the profile with the command line's options folded in (:mod:`harness.runs.options`):
+the table motion, the controller with its design model, the sampling settings, and the
+results in the JSON layout of the issue tracker (SI).
 """
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness import strict_json
 from harness.control.estimator import FrictionEstimator
-from harness.control.factory import (
-    build_controller_for_rig,
-    designed_with_actuator,
-    make_controller,
-    require_design,
-)
+from harness.control.factory import build_controller_for_rig, designed_with_actuator, make_controller
 from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
-from harness.motions import GroundMotion, check_table_limits, load_motion
+from harness.motions import GroundMotion
+from harness.motions.summary import motion_facts
 from harness.profile import Profile
+from harness.recording import strict_json
 from harness.rig.truth import TruthDifference, truth_metadata
+from harness.runs.options import NO_CONTROLLER, StudyOptions, prepare_motion, resolve_profile
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
-
-NO_CONTROLLER = "none"
-
-
-@dataclass(frozen=True)
-class StudyOptions:
-    """Command-line overrides of a profile; ``None`` keeps the profile's value."""
-
-    record: str | None = None
-    records_dir: str | None = None
-    pga_g: float | None = None
-    time_scale: float | None = None
-    duration_s: float | None = None
-    controller: str | None = None
-    rate_hz: float | None = None
-    friction: str | None = None
-    transport_delay_s: float | None = None
-    design_stiffness_scale: float | None = None
-    rig_effects: bool = False
 
 
 @dataclass
@@ -87,88 +64,6 @@ class StudyResult:
     def write_json(self, path: str | Path) -> None:
         """Write :meth:`to_json` to ``path``."""
         Path(path).write_text(strict_json.dumps(self.to_json(), indent=2) + "\n")
-
-
-def motion_facts(motion: GroundMotion) -> dict:
-    """Name, PGA (g), PGV (m/s), PGD (m), time scale, duration (s) and the share of Arias intensity the cut left out."""
-    return {
-        "name": motion.name,
-        "pga_g": motion.pga_g,
-        "pgv_m_s": motion.pgv_m_s,
-        "pgd_m": motion.pgd_m,
-        "time_scale": motion.time_scale,
-        "duration_s": motion.duration_s,
-        "arias_left_out": motion.arias_left_out,
-    }
-
-
-def resolve_profile(profile: Profile, options: StudyOptions) -> Profile:
-    """The profile with the command line's options folded in: the one place they are resolved.
-
-    Every option that has a profile key becomes that key's value, so everything downstream
-    (the simulator, the loop, the virtual rig in its own process) reads one frozen profile
-    and nothing looks at the options again:
-
-    - ``record``, ``records_dir`` (resolved with ``$HARNESS_RECORDS_DIR`` and made absolute,
-      like a record given as a relative path), ``pga_g``, ``time_scale``, ``duration_s``
-      go to the ``record`` section;
-    - ``controller`` (unless ``none``), ``friction``, ``transport_delay_s`` and
-      ``design_stiffness_scale`` to ``control``;
-    - ``rate_hz`` to ``control.rate_hz``, ``loop.rate_hz`` and the CAN command and sensor
-      rates, which must agree (the profile checks it).
-
-    Parameters
-    ----------
-    profile : Profile
-    options : StudyOptions
-
-    Returns
-    -------
-    Profile
-        Validated like a loaded profile (its ``__post_init__`` checks run again).
-    """
-    from harness.motions import records_dir_from
-    from harness.motions.config import resolve_record_name
-
-    record = profile.record
-    name = options.record if options.record is not None else record.name
-    name = resolve_record_name(name, Path.cwd() if options.record is not None else profile.base_dir)
-    records_dir = records_dir_from(options.records_dir, record.records_dir, base_dir=profile.base_dir)
-    record = dataclasses.replace(
-        record, name=name, records_dir=None if records_dir is None else str(Path(records_dir).resolve()),
-        **_given(pga_g=options.pga_g, time_scale=options.time_scale, duration_s=options.duration_s),
-    )
-    if options.controller not in (None, NO_CONTROLLER):
-        require_design(profile, options.controller)
-    control = dataclasses.replace(profile.control, **_given(
-        controller=None if options.controller == NO_CONTROLLER else options.controller,
-        rate_hz=options.rate_hz, friction=options.friction, transport_delay_s=options.transport_delay_s,
-        design_stiffness_scale=options.design_stiffness_scale,
-    ))
-    changes: dict = {"record": record, "control": control}
-    if options.rate_hz is not None:
-        changes["loop"] = dataclasses.replace(profile.loop, rate_hz=options.rate_hz)
-        changes["can"] = profile.can_settings(rate_hz=options.rate_hz)
-    try:
-        return dataclasses.replace(profile, **changes)
-    except ValueError as err:  # a combination the profile refuses, as it would from the file
-        raise ProfileError(f"{err} (with the command line's options)", profile.source_path) from err
-
-
-def _given(**values) -> dict:
-    """The items whose value is not None."""
-    return {key: value for key, value in values.items() if value is not None}
-
-
-def prepare_motion(profile: Profile, options: StudyOptions | None = None) -> GroundMotion:
-    """The processed table motion of ``profile`` (with ``options`` folded in), checked against the table."""
-    if options is not None:
-        profile = resolve_profile(profile, options)
-    record = profile.record
-    motion = load_motion(record, base_dir=profile.base_dir, records_dir_flag=record.records_dir)
-    if profile.table is not None:
-        check_table_limits(motion, profile.table)
-    return motion
 
 
 def sampling_settings(profile: Profile) -> SamplingSettings:

@@ -18,7 +18,8 @@ from harness.profile import Profile
 from harness.recording.metadata import safe_name
 from harness.report.batch_summary import BatchCase, batch_tables
 from harness.report.peak_table import PeakTable
-from harness.runs.simulate import StudyOptions, StudyResult, run_study
+from harness.runs.options import StudyOptions
+from harness.runs.simulate import StudyResult, run_study
 from harness.runs.simulate_output import write_study_folders
 
 SUMMARY_FILES = ("summary_peaks.csv", "summary_reduction.csv")

@@ -17,7 +17,7 @@ import numpy as np
 
 from harness.recording.simcase import write_simulation_case
 from harness.rig.truth import METADATA_KEY as RIG_TRUTH
-from harness.rowlayout import SIMULATED_CONTROL
+from harness.signals.columns import SIMULATED_CONTROL
 
 
 def unsampled_end(columns: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:

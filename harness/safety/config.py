@@ -1,6 +1,6 @@
 """Configuration of the safety layer: the profile's ``safety:`` section.
 
-Every limit is a frozen dataclass field declared with :func:`harness.schema.quantity`,
+Every limit is a frozen dataclass field declared with :func:`harness.config.schema.quantity`,
 so it carries its unit (named in the key) and its range. Defaults fit the NCEER
 quarter-scale rig (shared/SPEC.md 6b): total weight about 39.5 kN, peak control
 force 12-14 % of it (about 5 kN), so a 10 kN force limit leaves a factor of two;
@@ -17,8 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from harness.input_limits import MAX_EVENT_CAPACITY, MAX_WINDOW_COUNT
-from harness.schema import quantity
+from harness.config.input_limits import MAX_EVENT_CAPACITY, MAX_WINDOW_COUNT
+from harness.config.schema import quantity
 
 #: Actions a detector with a configurable action may take.
 DetectorActionName = Literal["indicate", "safe_stop", "trip"]
@@ -85,7 +85,7 @@ class SensorConfig:
 class CommsConfig:
     """Rates of CAN faults tolerated, each as "more than N in a sliding window"."""
 
-    # Each window preallocates max+1 slots: MAX_WINDOW_COUNT caps them (harness/input_limits.py says why).
+    # Each window preallocates max+1 slots: MAX_WINDOW_COUNT caps them (harness/config/input_limits.py says why).
     max_e2e_rejects: int = quantity(5, ge=0, le=MAX_WINDOW_COUNT, doc="counter/CRC rejections allowed per window")
     e2e_window_s: float = quantity(1.0, unit="s", gt=0, doc="sliding window for E2E rejections")
     max_error_frames: int = quantity(10, ge=0, le=MAX_WINDOW_COUNT, doc="bus error frames allowed per window")

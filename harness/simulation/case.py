@@ -19,10 +19,10 @@ from typing import Literal
 import numpy as np
 
 from drivers.measurements import Measurements
-from harness import rowlayout as layout
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.model.plant import Plant
+from harness.signals import columns as layout
 from harness.simulation.sampled import CaseResult, CaseSamples, case_result
 
 __all__ = ["CaseResult", "FrictionSource", "SamplingSettings", "run_case"]
@@ -109,7 +109,7 @@ def _control_step(
     """The controller's work at sample ``k`` (time ``t``, s): measure, estimate friction, compute the force.
 
     The returned ``control(k, t) -> force_N`` records the controller's internals into ``values``
-    (the :data:`harness.rowlayout.SIMULATED_CONTROL` columns).
+    (the :data:`harness.signals.columns.SIMULATED_CONTROL` columns).
     """
     period = 1.0 / settings.rate_hz
     table_x, table_v = plant.table.states(times)
@@ -167,7 +167,7 @@ def run_case(
     Returns
     -------
     CaseResult
-        Columns :func:`harness.rowlayout.simulation_columns` names; ``force_command_N`` is the applied force.
+        Columns :func:`harness.signals.columns.simulation_columns` names; ``force_command_N`` is the applied force.
     """
     started = time.perf_counter()
     for part in (plant, estimator, controller):

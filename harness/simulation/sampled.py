@@ -4,7 +4,7 @@
 :func:`harness.simulation.twin.run_rig_twin` (the same through the rig's sensor, actuator and safety
 models) differ only in what one controller sample does. Both record, for every sample
 ``k = 0 .. n - 1``, the plant state at ``t_k`` and named per-sample values (the columns of
-:mod:`harness.rowlayout`), plus one last row at the end of the last interval; both turn
+:mod:`harness.signals.columns`), plus one last row at the end of the last interval; both turn
 that into the columns and peaks of a :class:`CaseResult`.
 """
 
@@ -17,7 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
-from harness.peaks import Peaks, peak_responses
+from harness.signals.peaks import Peaks, peak_responses
 
 #: How many progress reports a case makes (about every 5 %).
 _PROGRESS_REPORTS = 20
@@ -56,7 +56,7 @@ class CaseSamples:
     state_size : int
         Length of the plant state ``(Z, nu)``.
     names : sequence of str
-        Columns (:mod:`harness.rowlayout` names) recorded per sample besides the state.
+        Columns (:mod:`harness.signals.columns` names) recorded per sample besides the state.
 
     Attributes
     ----------

@@ -22,11 +22,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from harness import rowlayout as layout
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.errors import ModelError
-from harness.peaks import peak_responses
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
 from harness.rig.parts import RigParts
@@ -35,6 +33,8 @@ from harness.rig.table import TablePlant
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
+from harness.signals import columns as layout
+from harness.signals.peaks import peak_responses
 from harness.simulation.sampled import CaseResult, CaseSamples, case_result
 
 _MAX_SENSOR_DELAY_S = 1.0
@@ -42,7 +42,7 @@ _MAX_SENSOR_DELAY_S = 1.0
 #: The sensor messages, by their place in :data:`harness.rig.sensors.MESSAGE_COLUMNS`.
 _TABLE_MESSAGE, _BASE_MESSAGE, _DRIFT_MESSAGE, _ACCEL_MESSAGE = range(len(MESSAGE_COLUMNS))
 #: What the twin records per sample: every sensor reading (the rig's ring order is
-#: :data:`harness.rowlayout.SENSOR_COLUMNS`'s) and the control.
+#: :data:`harness.signals.columns.SENSOR_COLUMNS`'s) and the control.
 _RECORDED = (*layout.SENSOR_COLUMNS, *layout.TWIN_CONTROL)
 #: Repeated over the row after the last sample: everything sampled; the actuator force is the one acting then.
 _HELD = tuple(name for name in _RECORDED if name != layout.FORCE_MEASURED)
@@ -87,7 +87,7 @@ def run_rig_twin(
     Returns
     -------
     CaseResult
-        Columns :data:`harness.rowlayout.TWIN_COLUMNS`, as a dry run records them: measured
+        Columns :data:`harness.signals.columns.TWIN_COLUMNS`, as a dry run records them: measured
         signals (with the sensors' noise, quantization and delay, story signals held between
         their samples), the plant's true bearing state, the supervised command
         ``force_command_N`` and the actuator force ``force_measured_N``; peaks of those;

@@ -60,7 +60,7 @@ class CaseSpec:
     options: tuple[tuple[str, Any], ...]
 
     def study_options(self) -> dict[str, Any]:
-        """Keyword arguments of ``harness.runs.simulate.StudyOptions`` for this case."""
+        """Keyword arguments of ``harness.runs.options.StudyOptions`` for this case."""
         return {**dict(self.options), "record": self.record.source, "pga_g": self.pga_g, "controller": self.controller}
 
     def input_columns(self) -> dict[str, Any]:

@@ -15,7 +15,7 @@ from typing import Literal
 
 import numpy as np
 
-from harness.schema import quantity
+from harness.config.schema import quantity
 
 
 @dataclass(frozen=True)

@@ -20,8 +20,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from harness import strict_json
 from harness.errors import ProfileError
+from harness.recording import strict_json
 from harness.sweep.cases import CaseSpec
 from harness.sweep.engines import Engine
 from harness.sweep.rows import FAILED, OUTCOME
@@ -46,8 +46,8 @@ class Plan:
 
 
 @dataclass
-class Outcome:
-    """What a sweep did."""
+class SweepTotals:
+    """What a sweep did: cases run and failed, its wall time, the integrators' CPU time, whether Ctrl-C stopped it."""
 
     ran: int = 0
     failed: int = 0
@@ -106,36 +106,36 @@ def plan(cases: list[CaseSpec], store: ResultStore, retry_failed: bool = False) 
 def run_sweep(
     todo: list[CaseSpec], engine: Engine, runner: CaseRunner, store: ResultStore,
     on_row: Callable[[dict[str, Any]], None] | None = None,
-) -> Outcome:
+) -> SweepTotals:
     """Run ``todo`` on ``engine``, writing each row as it comes; compact the results at the end.
 
-    Ctrl-C stops the sweep: the rows received so far are kept (``Outcome.interrupted``), and a
+    Ctrl-C stops the sweep: the rows received so far are kept (``SweepTotals.interrupted``), and a
     rerun goes on from there.
     """
-    outcome, started = Outcome(), time.perf_counter()
+    totals, started = SweepTotals(), time.perf_counter()
     try:
         for row in engine.rows(runner, todo):
             store.append(row)
-            outcome.ran += 1
-            outcome.failed += row[OUTCOME] == FAILED
-            outcome.integration_s += float(row.get("integration_s") or 0.0)
+            totals.ran += 1
+            totals.failed += row[OUTCOME] == FAILED
+            totals.integration_s += float(row.get("integration_s") or 0.0)
             if on_row is not None:
                 on_row(row)
     except KeyboardInterrupt:
-        outcome.interrupted = True
+        totals.interrupted = True
     finally:
-        outcome.wall_time_s = time.perf_counter() - started
+        totals.wall_time_s = time.perf_counter() - started
         store.compact()
-    return outcome
+    return totals
 
 
 def write_metadata(
-    folder: Path, study: Study, engine: Engine, cases: Plan, outcome: Outcome | None, started: datetime,
+    folder: Path, study: Study, engine: Engine, cases: Plan, totals: SweepTotals | None, started: datetime,
     report: dict[str, Any],
 ) -> Path:
     """``sweep.json``: the study, the engine, the counts and times of the last sweep into ``folder``.
 
-    Written as the sweep starts (``outcome`` None: ``ended`` is null) and again as it ends;
+    Written as the sweep starts (``totals`` None: ``ended`` is null) and again as it ends;
     ``report`` holds the report's settings (:class:`harness.sweep.report.ReportSettings`).
     """
     from importlib.metadata import PackageNotFoundError, version
@@ -148,8 +148,8 @@ def write_metadata(
         "study": study.name, "study_file": study.source_path, "profile": str(study.profile_path()),
         "cases": len(cases.cases), "skipped_as_done": cases.skipped, "engine": engine.description,
         "workers": engine.workers, "started": started.isoformat(),
-        "ended": None if outcome is None else datetime.now(UTC).isoformat(),
-        **({} if outcome is None else asdict(outcome)),
+        "ended": None if totals is None else datetime.now(UTC).isoformat(),
+        **({} if totals is None else asdict(totals)),
         "host": platform.node(), "python": platform.python_version(), "harness": harness_version,
         "storage": ResultStore(folder).format, "report": report,
     }

@@ -33,10 +33,10 @@ from harness.sweep.summary import (
     SHORT_PEAKS,
     SHORT_REDUCTION,
     Columns,
-    Table,
+    ValueTable,
     design_labels,
-    peaks_table,
-    reduction_table,
+    peaks_by_design,
+    reduction_by_design,
 )
 
 
@@ -57,7 +57,7 @@ class ReportSettings:
         return cls(**{key: data[key] for key in ("study", "grid_keys", "stroke_limit_m", "drift_limit_m") if key in data})
 
 
-def write_table_csv(table: Table, path: Path) -> Path:
+def write_table_csv(table: ValueTable, path: Path) -> Path:
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(table.header)
@@ -74,7 +74,7 @@ def write_ida(columns: Columns, labels: np.ndarray, settings: ReportSettings, fo
     """``ida.csv`` and ``ida.png`` (largest story drift and sliding displacement against PGA)."""
     drift, sliding = design_curves(columns, labels, MAX_DRIFT), design_curves(columns, labels, SLIDING)
     header = ["response", "design", "pga_g", "cases", "median", "p16", "p84"]
-    table = Table("IDA", header, _ida_rows(MAX_DRIFT, drift) + _ida_rows(SLIDING, sliding))
+    table = ValueTable("IDA", header, _ida_rows(MAX_DRIFT, drift) + _ida_rows(SLIDING, sliding))
     return [write_table_csv(table, folder / "ida.csv"),
             plot_ida(drift, sliding, folder / "ida.png", f"{settings.study}: incremental dynamic analysis")]
 
@@ -94,15 +94,15 @@ def write_fragility(columns: Columns, labels: np.ndarray, settings: ReportSettin
             for (name, limit, _), (_, found) in zip(panels, curves, strict=True)
             for c in found for level, n, k in zip(c.pga_g, c.count, c.exceeded, strict=True)]
     header = ["response", "limit_m", "design", "pga_g", "cases", "exceeded", "theta_g", "beta", "note"]
-    return [write_table_csv(Table("fragility", header, rows), folder / "fragility.csv"),
+    return [write_table_csv(ValueTable("fragility", header, rows), folder / "fragility.csv"),
             plot_fragility(curves, folder / "fragility.png", f"{settings.study}: fragility, lognormal fit")]
 
 
-def write_report(columns: Columns, settings: ReportSettings, folder: Path) -> tuple[list[Path], list[Table]]:
+def write_report(columns: Columns, settings: ReportSettings, folder: Path) -> tuple[list[Path], list[ValueTable]]:
     """Every file of the report into ``folder`` (created); returns the files and the two short summary tables."""
     folder.mkdir(parents=True, exist_ok=True)
     labels = design_labels(columns, settings.grid_keys)
-    tables = [reduction_table(columns, settings.grid_keys), peaks_table(columns, settings.grid_keys)]
+    tables = [reduction_by_design(columns, settings.grid_keys), peaks_by_design(columns, settings.grid_keys)]
     files = [write_table_csv(tables[0], folder / "summary.csv"), write_table_csv(tables[1], folder / "peaks.csv")]
     short = [tables[0].select(SHORT_REDUCTION), tables[1].select(SHORT_PEAKS)]
     markdown = "\n\n".join(f"### {table.title}\n\n{table.to_markdown()}" for table in short)

@@ -19,9 +19,9 @@ import functools
 from dataclasses import dataclass
 from typing import Any, get_type_hints
 
+from harness.config.schema import build, to_data
 from harness.errors import ProfileError
 from harness.profile import Profile, load_profile, merge, parse_overrides
-from harness.schema import build, to_data
 
 #: Sections rebuilt on their own: plain configuration whose checks are all in their dataclasses.
 FAST_SECTIONS = frozenset({"structure", "bearing", "control", "record", "simulation"})

@@ -4,7 +4,7 @@ Columns, by name:
 
 - inputs: ``case_id`` (the key), ``case_index``, ``record``, ``pga_g``, ``controller``, one
   column per axis (``bearing.mu_max`` holds the SI value, ``scale:KEY`` the factor), ``sample``;
-- peaks: ``passive.NAME`` and ``controlled.NAME`` for every name of :meth:`harness.peaks.Peaks.flatten`
+- peaks: ``passive.NAME`` and ``controlled.NAME`` for every name of :meth:`harness.signals.peaks.Peaks.flatten`
   (``sliding_displacement_m``, ``drift_3_m``, ``floor_acceleration_8_m_s2``, ``peak_force_pct_weight``
   ...), plus ``max_drift_m`` and ``max_floor_acceleration_m_s2`` over the stories;
 - ``reduction_pct.NAME``: ``100 (passive - controlled) / passive`` (SPEC 5), NaN where undefined;
@@ -19,7 +19,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from harness.peaks import Peaks, reduction_pct
+from harness.signals.peaks import Peaks, reduction_pct
 
 OK, FAILED = "ok", "failed"
 OUTCOME, ERROR, WALL_TIME, INTEGRATION, WORKER = "outcome", "error", "wall_time_s", "integration_s", "worker"

@@ -1,6 +1,6 @@
 """The study file of ``harness sweep``: a base profile and its axes, validated like a profile.
 
-A study file is YAML, read into the frozen dataclasses below with :func:`harness.schema.build`,
+A study file is YAML, read into the frozen dataclasses below with :func:`harness.config.schema.build`,
 so it is refused exactly as a profile is: unknown keys, wrong types, units and ranges are
 reported with the file, the key path, what was found and what was expected. Example::
 
@@ -36,8 +36,7 @@ from typing import Any, Literal
 
 import yaml
 
-from harness.errors import ProfileError
-from harness.input_limits import (
+from harness.config.input_limits import (
     MAX_DELAY_S,
     MAX_DURATION_S,
     MAX_PGA_G,
@@ -46,11 +45,12 @@ from harness.input_limits import (
     MAX_TIME_SCALE,
     MIN_TIME_SCALE,
 )
-from harness.schema import build, internal, quantity
+from harness.config.schema import build, internal, quantity
+from harness.config.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
+from harness.errors import ProfileError
 from harness.sweep.distributions import Distribution
-from harness.yamlload import MAX_YAML_CHARS, DuplicateKeyError, load_unique
 
-#: Largest study file read (bytes): a study is a page of YAML; the limit of every YAML text (harness/yamlload.py).
+#: Largest study file read (bytes): a study is a page of YAML; the limit of every YAML text (harness/config/yamlload.py).
 MAX_STUDY_BYTES = MAX_YAML_CHARS
 #: Most Monte-Carlo samples per grid point.
 MAX_SAMPLES = 1_000_000

@@ -45,8 +45,14 @@ SHORT_PEAKS = ["design", "cases", SLIDING, "base_acceleration_m_s2", MAX_DRIFT, 
 
 
 @dataclass(frozen=True)
-class Table:
-    """A table: a title, column names and rows of values (numbers or text)."""
+class ValueTable:
+    """Rows of raw values (numbers at full precision, or text) under column names, with a title.
+
+    What a sweep's summaries hold: its CSV files take the values as they are, and
+    :meth:`cells` formats them for Markdown and the console (where a
+    :class:`~harness.report.text_table.TextTable` of those cells draws them). Beside it,
+    :class:`~harness.report.peak_table.PeakTable` holds peak responses (quantities against cases).
+    """
 
     title: str
     header: list[str]
@@ -54,10 +60,10 @@ class Table:
     #: The columns holding percent reductions (see :meth:`cells`).
     reductions: frozenset[str] = frozenset()
 
-    def select(self, names: Sequence[str]) -> Table:
+    def select(self, names: Sequence[str]) -> ValueTable:
         """The same table with only the columns ``names`` (those it has), in that order."""
         keep = [self.header.index(name) for name in names if name in self.header]
-        return Table(self.title, [self.header[i] for i in keep], [[row[i] for i in keep] for row in self.rows],
+        return ValueTable(self.title, [self.header[i] for i in keep], [[row[i] for i in keep] for row in self.rows],
                      self.reductions)
 
     def cells(self, row: Sequence[Any], digits: int = 3) -> list[str]:
@@ -161,7 +167,7 @@ def _summary_row(columns: Columns, rows: np.ndarray, design: str, record: str) -
     return row + [_stat(force, "median"), _stat(force, "max")]
 
 
-def reduction_table(columns: Columns, grid_keys: Sequence[str]) -> Table:
+def reduction_by_design(columns: Columns, grid_keys: Sequence[str]) -> ValueTable:
     """Median, min (the worst case) and max % reduction of each response per design, per record and over all records."""
     header = ["design", "record", "cases", "failed"]
     reductions = [f"{heading} {how} %" for heading in REDUCED.values() for how in ("median", "min", "max")]
@@ -177,7 +183,7 @@ def reduction_table(columns: Columns, grid_keys: Sequence[str]) -> Table:
             rows.append(_summary_row(columns, np.intersect1d(design_rows, record_rows), design, record))
         if len(records) > 1:
             rows.append(_summary_row(columns, design_rows, design, ALL))
-    return Table("% reduction against the passive case, per design and record (min: the worst case; negative: the "
+    return ValueTable("% reduction against the passive case, per design and record (min: the worst case; negative: the "
                  "response grew)", header, rows, frozenset(reductions))
 
 
@@ -187,7 +193,7 @@ def peak_names(columns: Columns) -> list[str]:
     return [name[len(prefix):] for name in columns if name.startswith(prefix)]
 
 
-def peaks_table(columns: Columns, grid_keys: Sequence[str]) -> Table:
+def peaks_by_design(columns: Columns, grid_keys: Sequence[str]) -> ValueTable:
     """Median peak responses per design (controlled), beside the passive case's: the Table 2 layout."""
     names = peak_names(columns)
     ok = ok_rows(columns)
@@ -201,4 +207,4 @@ def peaks_table(columns: Columns, grid_keys: Sequence[str]) -> Table:
             continue
         rows.append([design, len(chosen)] + [_stat(columns.get(f"{CONTROLLED}.{n}", np.full(len(ok), np.nan))[chosen], "median")
                                              for n in names])
-    return Table("median peak responses (SI; force in % of the weight)", header, rows)
+    return ValueTable("median peak responses (SI; force in % of the weight)", header, rows)

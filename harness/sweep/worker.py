@@ -21,8 +21,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from harness.peaks import Peaks
 from harness.profile import Profile
+from harness.signals.peaks import Peaks
 from harness.sweep.cases import CaseSpec
 from harness.sweep.resolve import BaseProfile, case_profile
 from harness.sweep.rows import outcome_columns, peak_columns
@@ -45,7 +45,7 @@ class SimulatedCase:
 
 
 #: ``simulate(profile, study_options) -> SimulatedCase``: ``study_options`` are the keyword
-#: arguments of ``harness.runs.simulate.StudyOptions``.
+#: arguments of ``harness.runs.options.StudyOptions``.
 Simulate = Callable[[Profile, dict[str, Any]], SimulatedCase]
 
 

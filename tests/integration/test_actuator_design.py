@@ -13,7 +13,8 @@ import pytest
 from harness.control.controllers import PhiSMC
 from harness.motions import load_motion
 from harness.profile import load_profile
-from harness.runs.simulate import StudyOptions, run_study
+from harness.runs.options import StudyOptions
+from harness.runs.simulate import run_study
 from harness.simulation.twin import run_rig_twin
 from tests.conftest import PROFILES
 

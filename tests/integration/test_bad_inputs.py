@@ -324,7 +324,7 @@ def test_every_numeric_option_is_range_checked():
 def test_the_cli_bounds_match_the_profile_schema():
     from dataclasses import fields
 
-    from harness import input_limits
+    from harness.config import input_limits
     from harness.loop.config import LoopConfig
 
     rate = next(f for f in fields(LoopConfig) if f.name == "rate_hz")

@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from harness import strict_json
 from harness.cli import main
+from harness.recording import strict_json
 from harness.recording.reader import load_run
 from tests.conftest import PROFILES
 

@@ -18,15 +18,16 @@ import pytest
 
 from drivers.measurements import Measurements
 from drivers.protocol_values import DriveState, RigCommand
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import make_controller
-from harness.peaks import peak_responses
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig, SensorsConfig
 from harness.rig.virtual_rig import RigParts, VirtualRig
-from harness.runs.simulate import StudyOptions, prepare_motion, run_study
+from harness.runs.options import StudyOptions, prepare_motion
+from harness.runs.simulate import run_study
+from harness.signals.peaks import peak_responses
 from tests.conftest import PROFILES
 
 STEP_TIMEOUT_S = 5.0

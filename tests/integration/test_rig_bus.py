@@ -22,8 +22,8 @@ import pytest
 from drivers.decoder import RxStatus
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
 from harness import exit_codes
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.errors import BusError
 from harness.profile import load_profile
 from harness.rig.config import (
@@ -36,8 +36,8 @@ from harness.rig.config import (
 )
 from harness.rig.faults import fault_id_for
 from harness.rig.virtual_rig import RigParts, VirtualRig
+from harness.runs.options import StudyOptions, prepare_motion
 from harness.runs.rig_service import run_rig_command
-from harness.runs.simulate import StudyOptions, prepare_motion
 from tests.conftest import PROFILES
 
 PERIOD = 0.002
@@ -477,7 +477,7 @@ def test_ctrl_c_stops_a_rig_process_cleanly():
     code = (
         "import sys\n"
         "from harness.runs.rig_service import run_rig_command\n"
-        "from harness.runs.simulate import StudyOptions\n"
+        "from harness.runs.options import StudyOptions\n"
         f"sys.exit(run_rig_command({str(PROFILES / 'nceer_4dof.yaml')!r}, interface='virtual', channel='sigint', "
         "options=StudyOptions(record='synthetic', duration_s=3.0), on_ready=lambda rig: print('ready', flush=True)))\n"
     )

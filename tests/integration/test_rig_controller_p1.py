@@ -12,7 +12,8 @@ from __future__ import annotations
 import pytest
 
 from harness.profile import load_profile
-from harness.runs.simulate import StudyOptions, run_study
+from harness.runs.options import StudyOptions
+from harness.runs.simulate import run_study
 from tests.conftest import PROFILES
 
 RIG_PROFILE = PROFILES / "nceer_4dof.yaml"

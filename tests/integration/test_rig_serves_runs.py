@@ -24,8 +24,8 @@ import pytest
 
 from drivers.decoder import RxStatus
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.cli import main
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig
@@ -35,8 +35,8 @@ from harness.rig.inbox import NEW_SENDER_SILENCE_S
 from harness.rig.virtual_rig import RigParts, VirtualRig
 from harness.runs.drive_reset import DriveResetRefused, reset_drive
 from harness.runs.dry_run import RigCoordinator
+from harness.runs.options import StudyOptions, prepare_motion
 from harness.runs.rig_service import run_rig_command
-from harness.runs.simulate import StudyOptions, prepare_motion
 from harness.safety.lifecycle import State
 from tests.conftest import PROFILES
 

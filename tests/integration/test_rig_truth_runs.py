@@ -19,7 +19,8 @@ from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.motions import load_motion
 from harness.profile import load_profile
-from harness.runs.simulate import StudyOptions, run_study
+from harness.runs.options import StudyOptions
+from harness.runs.simulate import run_study
 from harness.simulation import twin as twin_module
 from harness.simulation.twin import run_rig_twin
 from tests.conftest import PROFILES

@@ -15,12 +15,12 @@ import pytest
 from harness import exit_codes
 from harness.cli import build_parser, main
 from harness.commands.rig import banner
-from harness.peaks import run_peaks
 from harness.profile import load_profile
 from harness.recording import load_run
 from harness.report.quantities import CONSOLE_WORDING, response_quantities
 from harness.runs.dry_run import DryRunOptions, dry_run
-from harness.runs.simulate import StudyOptions
+from harness.runs.options import StudyOptions
+from harness.signals.peaks import run_peaks
 
 RUN = ["run", "--record", "synthetic", "--duration", "1", "--interface", "seqpacket", "--channel", "nowhere"]
 
@@ -62,7 +62,7 @@ def test_run_prints_the_peak_table_of_what_it_measured(tmp_path, monkeypatch, ca
     done = dry_run(profile, DryRunOptions(study=StudyOptions(record="synthetic", duration_s=1.0), interface="virtual",
                                           log_dir=str(tmp_path), lockstep=True, show_console=False, compare=False))
     assert done.session.outcome == "completed"
-    monkeypatch.setattr("harness.runs.session.run_session", lambda *args, **kwargs: done.session)
+    monkeypatch.setattr("harness.runs.run.run_session", lambda *args, **kwargs: done.session)
     capsys.readouterr()
     assert main([*RUN, "--yes", "--log-dir", str(tmp_path)]) == exit_codes.OK
     out = capsys.readouterr().out

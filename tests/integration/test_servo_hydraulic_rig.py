@@ -15,7 +15,7 @@ from harness import exit_codes
 from harness.cli import main
 from harness.profile import load_profile
 from harness.runs.dry_run import DryRunOptions, dry_run
-from harness.runs.simulate import StudyOptions
+from harness.runs.options import StudyOptions
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from harness.model.plant import Plant, TableMotion
 from harness.model.reference import ReferencePlant
 from harness.motions import load_motion
 from harness.profile import load_profile
-from harness.rowlayout import simulation_columns
+from harness.signals.columns import simulation_columns
 from harness.simulation.case import SamplingSettings, run_case
 from tests.conftest import PROFILES
 

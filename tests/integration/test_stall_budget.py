@@ -17,14 +17,14 @@ import uuid
 
 import pytest
 
-from harness.can_link import open_harness, open_rig
+from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.loop.runner import ControlLoop
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile
 from harness.rig.virtual_rig import VirtualRig
-from harness.runs.simulate import StudyOptions, prepare_motion
+from harness.runs.options import StudyOptions, prepare_motion
 from harness.safety.supervisor import Supervisor
 
 RATE_HZ = 500.0

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from harness import strict_json
 from harness.cli import main
+from harness.recording import strict_json
 from harness.sweep.store import ResultStore, have_pyarrow
 from tests.conftest import PROFILES, SHARED_RECORDS
 

@@ -26,7 +26,7 @@ from harness.recording import load_run
 from harness.report import build_report
 from harness.report.peak_table import NO_REDUCTION
 from harness.runs.dry_run import serving_virtual_rig
-from harness.runs.simulate import StudyOptions, prepare_motion, resolve_profile
+from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 from tests.conftest import REPO
 
 DURATION_S = 4.0

@@ -16,7 +16,7 @@ from harness.profile import load_profile
 from harness.recording import load_run
 from harness.rig.virtual_rig import VirtualRig
 from harness.runs.dry_run import DryRunOptions, dry_run
-from harness.runs.simulate import StudyOptions
+from harness.runs.options import StudyOptions
 
 FAULT_AT_S = 1.0
 PERIOD_S = 0.002

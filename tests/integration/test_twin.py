@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness import rowlayout as layout
 from harness.control.factory import build_controller_for_rig
 from harness.motions import load_motion
 from harness.profile import load_profile
+from harness.signals import columns as layout
 from harness.simulation.twin import run_rig_twin
 from tests.conftest import PROFILES
 

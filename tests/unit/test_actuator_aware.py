@@ -270,7 +270,8 @@ def test_the_full_state_design_needs_the_state(profile):
 
 
 def test_the_ideal_simulation_refuses_an_actuator_aware_design(profile):
-    from harness.runs.simulate import StudyOptions, run_study
+    from harness.runs.options import StudyOptions
+    from harness.runs.simulate import run_study
 
     with pytest.raises(ProfileError, match="--rig-effects"):
         run_study(profile, StudyOptions(controller="phi-A", duration_s=1.0))

@@ -2,12 +2,21 @@
 
 - ``drivers/`` imports nothing from ``harness/``: the drivers know CAN and units, not the
   profile, the controller or the supervisor (DESIGN.md, "one direction").
-- No two modules import each other, even inside a function: the import graph has no cycle.
+- No two modules import each other, even inside a function or only for a type: the import
+  graph has no cycle.
+  An import of a package's module counts as an import of the package too, since Python runs
+  the package's ``__init__`` first (``harness.recording.strict_json`` runs the recording
+  package's, which starts the recorder's modules).
 - Imports run one way, from the top down: the command line and the commands, then the
-  runs, then the loop and the simulation, then the rig, control and safety, then the model,
-  the motions, the run folders and CAN, then configuration and errors. The test checks
-  the layers that have a rule of their own: nothing below imports a command or a run, and
-  nothing below the loop and the simulation imports them.
+  runs (with the sweep and the live console), then the loop and the simulation, then the
+  rig, control and safety, then the model, the motions, the run folders and CAN
+  (``harness.canbus``), then the foundation: configuration, errors, the host's real time
+  and the signals' names. The test checks the layers that have a rule of their own:
+  nothing below imports a command or a run, nothing below the loop and the simulation
+  imports them, CAN imports only the foundation (and the drivers), and the foundation
+  imports nothing else.
+- ``harness/`` keeps at most six loose modules (:data:`LOOSE_MODULES`); everything else
+  lives in a package named for its role.
 
 :func:`project_imports` is the reusable part: per module, the project modules it imports,
 imports inside functions and classes included (an import hidden in a function is still a
@@ -181,15 +190,42 @@ def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return cycles
 
 
+def with_packages_run_first(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """``graph`` with, for every import of a package's module from outside that package, the package too.
+
+    ``import harness.recording.strict_json`` runs ``harness/recording/__init__.py`` (and
+    ``harness/__init__.py``) first: those are dependencies of the importer as much as the
+    module it names. From inside the package they are not: its ``__init__`` is already running.
+    """
+    expanded = {}
+    for module, deps in graph.items():
+        found = set(deps)
+        for dep in deps:
+            parts = dep.split(".")
+            for end in range(1, len(parts)):
+                package = ".".join(parts[:end])
+                if package in graph and not _in(module, package):
+                    found.add(package)
+        expanded[module] = found - {module}
+    return expanded
+
+
 def test_the_import_graph_has_no_cycle() -> None:
-    cycles = import_cycles(project_imports(type_checking=False))
+    cycles = import_cycles(with_packages_run_first(project_imports(type_checking=False)))
     assert not cycles, f"modules that import each other (directly or round a ring): {cycles}"
 
 
+def test_no_ring_either_through_imports_made_for_a_type() -> None:
+    # An import under ``if TYPE_CHECKING:`` runs no code, but a ring kept for a type still makes
+    # each module unreadable without the other (report/build.py and report/summary.py were one).
+    cycles = import_cycles(project_imports(type_checking=True))
+    assert not cycles, f"modules that import each other, counting imports for types: {cycles}"
+
+
 #: Layers with a rule of their own: a module may import these only from the layers named.
-#: The live console (``harness.console``, ``harness.console_view``) is a view of the loop's
-#: status, drawn for a run: it sits with the runs.
-_RUNS = ("harness.cli", "harness.commands", "harness.runs", "harness.sweep", "harness.console", "harness.console_view")
+#: The live console (``harness.console``) is a view of the loop's status, drawn for a run: it
+#: sits with the runs.
+_RUNS = ("harness.cli", "harness.commands", "harness.runs", "harness.sweep", "harness.console")
 UPPER_LAYERS = {
     "harness.commands": ("harness.cli", "harness.commands"),
     "harness.runs": _RUNS,
@@ -200,6 +236,18 @@ UPPER_LAYERS = {
 #: The one exception, and why: the profile is every section's configuration put together,
 #: so it imports each package's ``config`` module (a leaf of plain dataclasses), the loop's too.
 SECTION_CONFIGS = {("harness.profile", "harness.loop.config")}
+
+#: The bottom layer: configuration (schema, units, YAML, input limits), errors, exit codes,
+#: paths, the host's real time (scheduler, memory, SCHED_FIFO) and the signals (the per-sample
+#: columns and the peaks computed from them). Everything may import it; it imports only itself.
+FOUNDATION = ("harness.config", "harness.errors", "harness.exit_codes", "harness.paths", "harness.realtime",
+              "harness.signals")
+#: Lower layers with a rule of their own: a module of the layer may import, of ``harness``, only
+#: itself and the layers named (the drivers are below them all).
+LOWER_LAYERS = {
+    **{package: FOUNDATION for package in FOUNDATION},
+    "harness.canbus": (*FOUNDATION, "harness.canbus"),
+}
 
 
 def _in(module: str, package: str) -> bool:
@@ -218,10 +266,48 @@ def test_imports_run_from_the_commands_down() -> None:
     assert not upward, f"imports that run upward: {upward}"
 
 
+def test_the_lower_layers_import_only_what_lies_below_them() -> None:
+    graph = project_imports(type_checking=False)
+    assert all(any(_in(module, layer) for module in graph) for layer in LOWER_LAYERS), "a layer without modules"
+    upward = sorted(
+        f"{module} -> {dep}"
+        for module, deps in graph.items()
+        for layer, allowed in LOWER_LAYERS.items()
+        if _in(module, layer)
+        for dep in deps
+        if _in(dep, "harness") and not any(_in(dep, a) for a in allowed)
+    )
+    assert not upward, f"imports that run upward from the foundation or CAN: {upward}"
+
+
+#: The only modules directly in ``harness/``: the package, the command line's entry, the errors,
+#: the exit statuses, the project's paths and the profile (every section put together). Any
+#: other module goes into the package of its role (``config``, ``realtime``, ``signals``, ...).
+LOOSE_MODULES = ("__init__.py", "cli.py", "errors.py", "exit_codes.py", "paths.py", "profile.py")
+
+
+def test_harness_keeps_at_most_six_loose_modules() -> None:
+    loose = sorted(path.name for path in (REPO / "harness").glob("*.py"))
+    assert "cli.py" in loose, "not the harness package"
+    assert len(LOOSE_MODULES) <= 6
+    others = sorted(set(loose) - set(LOOSE_MODULES))
+    assert not others, f"harness/ keeps only {', '.join(LOOSE_MODULES)} loose; move {others} into a package"
+
+
 def test_the_cycle_finder_finds_a_ring() -> None:
     ring = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
     assert import_cycles(ring) == [["a", "b", "c"]]
     assert import_cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_an_import_of_a_packages_module_runs_the_package_first() -> None:
+    # pkg/__init__ imports pkg.inner, which imports low; low imports pkg.leaf: a ring through pkg/__init__.
+    graph = {"pkg": {"pkg.inner"}, "pkg.inner": {"low"}, "pkg.leaf": set(), "low": {"pkg.leaf"}}
+    assert import_cycles(graph) == []
+    expanded = with_packages_run_first(graph)
+    assert expanded["low"] == {"pkg.leaf", "pkg"}
+    assert expanded["pkg.inner"] == {"low"}, "inside the package its __init__ is already running"
+    assert import_cycles(expanded) == [["low", "pkg", "pkg.inner"]]
 
 
 # --- the helper itself ----------------------------------------------------------------------

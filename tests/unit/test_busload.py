@@ -1,6 +1,6 @@
 """drivers/busload.py: frame length formula, load from DBC and rates, refusal above the allowed share.
 
-Also the profile's side: harness/can_config.py (rates of every message) and harness/can_link.py
+Also the profile's side: harness/canbus/config.py (rates of every message) and harness/canbus/link.py
 (refusal before the bus is opened).
 """
 
@@ -13,9 +13,9 @@ import pytest
 from drivers.busload import BusLoad, bus_load, check_bus_load, frame_bits
 from drivers.codec import load_protocol
 from drivers.errors import BusLoadError, ProtocolError
-from harness.can_config import RATE_FIELDS, CanConfig
+from harness.canbus.config import RATE_FIELDS, CanConfig
+from harness.config.schema import build
 from harness.errors import ProfileError
-from harness.schema import build
 
 PROTOCOL = load_protocol()
 
@@ -110,7 +110,7 @@ def test_config_from_yaml_mapping_with_units() -> None:
 
 def test_overloaded_link_is_refused_before_the_bus_is_opened(monkeypatch: pytest.MonkeyPatch) -> None:
     import drivers.link
-    from harness import can_link
+    from harness.canbus import link as can_link
 
     def must_not_open(*args: object, **kwargs: object) -> None:
         raise AssertionError("the bus was opened for a refused configuration")
@@ -128,7 +128,7 @@ def test_overloaded_link_is_refused_before_the_bus_is_opened(monkeypatch: pytest
 
 
 def test_prepare_accepts_the_defaults() -> None:
-    from harness.can_link import prepare
+    from harness.canbus.link import prepare
 
     protocol, load = prepare(CanConfig())
     assert protocol.version == CanConfig().protocol_version

@@ -20,10 +20,11 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-import harness.console
-from harness.console import LiveConsole, view_command, view_environment
+import harness.console.live
+from harness.console.live import LiveConsole, view_command, view_environment
 from harness.loop.runner import LoopStatus as LoopStatusFromRunner
-from harness.loop.status import STATE_NAMES, TEXT_FIELDS, LoopStatus, truncate_utf8
+from harness.loop.status import STATE_NAMES, LoopStatus
+from harness.loop.status_block import truncate_utf8
 from harness.safety.lifecycle import State
 
 #: Generous: a cold child start on a loaded two-core VM can take seconds.
@@ -103,7 +104,7 @@ def test_a_reader_sees_every_change_and_cannot_write():
 
 @pytest.mark.parametrize("text", ["é" * 200, "a" + "é" * 200, "€" * 100, "🙂" * 80, "plain " * 60])
 def test_text_is_truncated_at_a_character_boundary(text):
-    capacity = dict((name, capacity) for name, capacity, _ in TEXT_FIELDS)["last_event"]
+    capacity = LoopStatus.last_event.capacity
     with LoopStatus() as status:
         status.last_event = text
         kept = status.last_event
@@ -230,7 +231,7 @@ def test_the_child_draws_a_last_frame_and_exits_when_its_parent_dies(tmp_path):
     output = tmp_path / "frames.txt"
     parent_script = (
         "import os, subprocess, sys\n"
-        "from harness.console import view_command, view_environment\n"
+        "from harness.console.live import view_command, view_environment\n"
         "from harness.loop.status import LoopStatus\n"
         "status = LoopStatus(state='ARMED')\n"
         "command = view_command(status.path, 0.08, 0.1, 1e4, 'orphan title', parent_pid=os.getpid(), width=100,"
@@ -262,7 +263,7 @@ def test_live_console_on_a_string_console_spawns_nothing_and_prints_the_final_pa
     def no_spawn(*args, **kwargs):
         raise AssertionError("spawned a process")
 
-    monkeypatch.setattr(harness.console.subprocess, "Popen", no_spawn)
+    monkeypatch.setattr(harness.console.live.subprocess, "Popen", no_spawn)
     output = io.StringIO()
     status = LoopStatus(state="RUNNING")
     with LiveConsole(status, 0.08, 0.1, 1e4, "quiet title", console=Console(file=output, width=120)) as live:
@@ -334,7 +335,7 @@ def test_live_console_says_so_in_one_line_when_the_child_cannot_start(monkeypatc
     def cannot_start(*args, **kwargs):
         raise OSError("no processes left")
 
-    monkeypatch.setattr(harness.console.subprocess, "Popen", cannot_start)
+    monkeypatch.setattr(harness.console.live.subprocess, "Popen", cannot_start)
     terminal = _Terminal()
     status = LoopStatus(state="RUNNING")
     try:

@@ -9,10 +9,10 @@ import pytest
 from rich.console import Console
 
 from harness.commands.output import CAPTURED_WIDTH, CommandConsole, command_console, print_always
-from harness.peaks import Peaks
 from harness.report.batch_summary import BatchCase, batch_tables
 from harness.report.tables import in_console_wording, reduction_table
 from harness.report.text_table import TextTable
+from harness.signals.peaks import Peaks
 
 
 def _rendered(renderable, width: int) -> str:

@@ -7,8 +7,9 @@ import tracemalloc
 from rich.console import Console
 
 from drivers.protocol_values import DriveState, FaultCode
-from harness.console import LiveConsole, fault_name
-from harness.loop.status import EVENT_LINES, LoopStatus
+from harness.console.live import LiveConsole, fault_name
+from harness.loop.status import LoopStatus
+from harness.loop.status_block import EVENT_LINES
 from tests.unit.test_control_tick import PERIOD_S, Bench
 
 

@@ -17,8 +17,8 @@ import pytest
 from drivers.codec import load_protocol
 from drivers.e2e import protect
 from drivers.protocol_values import DriveState, EstopSource, FaultCode
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile

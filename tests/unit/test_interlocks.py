@@ -6,6 +6,7 @@ import dataclasses
 
 import pytest
 
+from harness.config.schema import build
 from harness.errors import ProfileError
 from harness.safety.config import (
     ActuatorConfig,
@@ -24,7 +25,6 @@ from harness.safety.interlocks import (
     StrokePredictiveLimit,
     StrokeSoftFade,
 )
-from harness.schema import build
 
 STROKE = StrokeConfig(soft_limit_m=0.05, fade_band_m=0.01, hard_limit_m=0.075, stop_time_s=0.1)
 EPS = 1e-9

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from harness.kernel_cache import kernels_cached
+from harness.model.kernel_cache import kernels_cached
 from harness.model.warmup import warm_up
 
 
@@ -27,7 +27,7 @@ def test_after_a_warm_up_the_real_kernels_are_cached() -> None:
 
 
 def test_cached_kernels_are_dropped_when_any_kernel_source_changes(tmp_path) -> None:
-    from harness.kernel_cache import FINGERPRINT_NAME, drop_stale_kernels
+    from harness.model.kernel_cache import FINGERPRINT_NAME, drop_stale_kernels
 
     files = ("callee.py", "caller.py")
     for name in files:

@@ -13,11 +13,11 @@ import pytest
 
 from harness.cli import build_parser
 from harness.commands.options import check_loop_rate, check_run_length
+from harness.config.input_limits import MIN_RUN_SAMPLES
 from harness.errors import ProfileError, RecordError
-from harness.input_limits import MIN_RUN_SAMPLES
 from harness.motions.config import SYNTHETIC_DT_S, load_motion
 from harness.profile import load_profile
-from harness.runs.simulate import StudyOptions, resolve_profile
+from harness.runs.options import StudyOptions, resolve_profile
 from tests.conftest import PROFILES
 
 RIG = PROFILES / "nceer_4dof.yaml"

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from harness.console import LiveConsole, stroke_bar
+from harness.console.live import LiveConsole, stroke_bar
 from harness.loop.operator import OperatorSignals
-from harness.loop.realtime import RealtimeConfig, apply_realtime, restore_realtime
 from harness.loop.runner import LoopStatus
 from harness.loop.timing import TimingStats
+from harness.realtime.host import RealtimeConfig, apply_realtime, restore_realtime
 
 
 def test_realtime_requests_are_granted_or_refused_plainly_and_gc_is_restored():

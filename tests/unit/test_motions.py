@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from harness.config.schema import build, to_data
 from harness.errors import ProfileError, RecordError
 from harness.motions import (
     CATALOG,
@@ -24,7 +25,6 @@ from harness.motions import (
     synthetic_record,
     synthetic_seed,
 )
-from harness.schema import build, to_data
 
 DATA_DIR = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ground_motions"
 needs_data = pytest.mark.skipif(

@@ -1,4 +1,4 @@
-"""The one peaks model (harness.peaks) against the columns it comes from."""
+"""The one peaks model (harness.signals.peaks) against the columns it comes from."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.peaks import (
+from harness.recording import load_run, write_simulation_case
+from harness.signals.peaks import (
     Peaks,
     force_column,
     peak_abs,
@@ -17,7 +18,6 @@ from harness.peaks import (
     reduction_pct,
     run_peaks,
 )
-from harness.recording import load_run, write_simulation_case
 
 WEIGHT_N = 1000.0
 

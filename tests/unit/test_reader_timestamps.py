@@ -8,8 +8,8 @@ import uuid
 
 import can
 
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 
 
 def _pair():

@@ -16,7 +16,7 @@ from harness.recording import (
     load_runs,
     write_simulation_case,
 )
-from harness.rowlayout import (
+from harness.signals.columns import (
     canonical_columns,
     count_stories,
     drift,

@@ -10,11 +10,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from harness.peaks import peak_responses, reduction_pct
 from harness.recording import RunFolder, canonical_columns, load_run
 from harness.report import build_report, summary_text
 from harness.runs.run_context import TARGET_MOTION_FILE, write_dry_run_context
 from harness.safety import bit
+from harness.signals.peaks import peak_responses, reduction_pct
 from harness.simulation.sampled import CaseResult
 
 N = 1000

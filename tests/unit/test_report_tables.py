@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.peaks import Peaks, run_peaks
 from harness.recording import (
     RunData,
     canonical_columns,
@@ -19,6 +18,7 @@ from harness.report import comparison_table, pair_table, reduction_table, runs_t
 from harness.report.batch_summary import BatchCase, reduction_summary
 from harness.report.peak_table import NO_REDUCTION, without_reductions
 from harness.report.tables import peaks_pair_table
+from harness.signals.peaks import Peaks, run_peaks
 
 WEIGHT_N = 4 * 9.80665 * 1000.0
 N_STORIES = 3

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from drivers.protocol_values import DriveState, FaultCode
+from harness.config.schema import build
 from harness.errors import ProfileError
 from harness.rig import faults as F
 from harness.rig.config import FaultSpec, RigConfig
@@ -16,7 +17,6 @@ from harness.rig.faults import (
     fault_id_for,
     schedule_from,
 )
-from harness.schema import build
 
 
 def test_fault_ids_follow_the_documented_table():

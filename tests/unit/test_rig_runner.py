@@ -8,11 +8,11 @@ import uuid
 import can
 import pytest
 
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 from harness.profile import load_profile
 from harness.rig.runner import serve
 from harness.rig.virtual_rig import VirtualRig
-from harness.runs.simulate import StudyOptions, prepare_motion
+from harness.runs.options import StudyOptions, prepare_motion
 from tests.conftest import PROFILES
 
 

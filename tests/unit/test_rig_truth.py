@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from harness.console import LiveConsole, view_command
+from harness.console.live import LiveConsole, view_command
 from harness.errors import ProfileError
 from harness.loop.status import LoopStatus
 from harness.model.bearing import MU_MAX, WEIGHT, BearingConfig

@@ -10,7 +10,7 @@ import typing
 import pytest
 from rich.console import Console
 
-from harness.console import LiveConsole, view_command
+from harness.console.live import LiveConsole, view_command
 from harness.errors import ProfileError
 from harness.loop.status import LoopStatus
 from harness.profile import command_force_limit_N, load_profile

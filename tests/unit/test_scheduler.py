@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from harness.scheduler import FixedRateScheduler
+from harness.realtime.scheduler import FixedRateScheduler
 
 
 class FakeClock:

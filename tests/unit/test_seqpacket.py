@@ -1,4 +1,4 @@
-"""The ``seqpacket`` interface (drivers/seqpacket.py): a CAN bus over Unix SOCK_SEQPACKET sockets.
+"""The ``seqpacket`` interface (drivers/seqpacket/): a CAN bus over Unix SOCK_SEQPACKET sockets.
 
 In-process tests open several buses in one process (they are real sockets, so the
 hub, relay and fail-over logic runs as across processes); the cross-process tests
@@ -25,19 +25,18 @@ from pathlib import Path
 import can
 import pytest
 
-import drivers  # noqa: F401  registers the interface
 from drivers import seqpacket
 from drivers.bus import is_queue_full
 from drivers.errors import BusError
-from drivers.seqpacket import (
-    ABSTRACT_PREFIX,
+from drivers.seqpacket.bus import (
     ACCEPT_CHECK_INTERVAL_S,
     BYTES_PER_QUEUED_FRAME,
     SOCKET_BUFFER_BYTES,
     WANTED_BACKLOG_FRAMES,
     SeqPacketBus,
-    parse_channel,
 )
+from drivers.seqpacket.channel import ABSTRACT_PREFIX, parse_channel
+from drivers.seqpacket.wire import encode_frame
 
 REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
@@ -331,7 +330,7 @@ def test_malformed_datagram_is_counted_and_dropped(buses: list[SeqPacketBus], ch
     try:
         raw.connect(ABSTRACT_PREFIX + channel)
         raw.send(b"\x01\x02")  # shorter than the header
-        raw.send(seqpacket.encode_frame(can.Message(arbitration_id=0x42, is_extended_id=False, data=b"\x07")))
+        raw.send(encode_frame(can.Message(arbitration_id=0x42, is_extended_id=False, data=b"\x07")))
         got = receive(hub, 1)
         assert [fields(m) for m in got] == [[0x42, False, False, False, False, False, False, 1, "07"]]
         assert hub.malformed_frames == 1
@@ -631,7 +630,9 @@ def test_idle_peer_rejoins_a_restarted_hub_without_losing_the_next_frame(
 # --- registration ------------------------------------------------------------------------------
 
 
-def test_register_makes_the_interface_known_without_the_entry_point(monkeypatch: pytest.MonkeyPatch, channel: str) -> None:
+@pytest.fixture
+def without_the_entry_point(monkeypatch: pytest.MonkeyPatch) -> None:
+    """python-can's interface tables as an import without the installed entry point leaves them."""
     import can.interfaces
     import can.util
 
@@ -642,6 +643,10 @@ def test_register_makes_the_interface_known_without_the_entry_point(monkeypatch:
     monkeypatch.setattr("can.interface.BACKENDS", backends)
     for module in (can.interfaces, can.util, can):
         monkeypatch.setattr(module, "VALID_INTERFACES", valid)
+
+
+@pytest.mark.usefixtures("without_the_entry_point")
+def test_register_makes_the_interface_known_without_the_entry_point(channel: str) -> None:
     with pytest.raises(can.CanInterfaceNotImplementedError):
         can.Bus(interface="seqpacket", channel=channel)
     seqpacket.register()
@@ -651,11 +656,37 @@ def test_register_makes_the_interface_known_without_the_entry_point(monkeypatch:
     bus.shutdown()
 
 
-def test_entry_point_is_installed() -> None:
-    found = {ep.name: ep.value for ep in entry_points(group="can.interface")}
-    assert found.get("seqpacket") == "drivers.seqpacket:SeqPacketBus", (
+@pytest.mark.usefixtures("without_the_entry_point")
+def test_importing_the_drivers_registers_nothing(channel: str) -> None:
+    import importlib
+
+    import drivers
+
+    importlib.reload(drivers)
+    importlib.reload(seqpacket)
+    assert "seqpacket" not in can.interfaces.BACKENDS and "seqpacket" not in can.VALID_INTERFACES
+    with pytest.raises(can.CanInterfaceNotImplementedError):
+        can.Bus(interface="seqpacket", channel=channel)
+
+
+@pytest.mark.usefixtures("without_the_entry_point")
+def test_open_bus_registers_the_interface_where_the_entry_point_is_missing(channel: str) -> None:
+    from drivers.bus import open_bus
+
+    bus = open_bus("seqpacket", channel)
+    try:
+        assert isinstance(bus, SeqPacketBus) and bus.channel == channel
+    finally:
+        bus.shutdown()
+
+
+def test_entry_point_is_installed_and_names_the_bus() -> None:
+    found = {ep.name: ep for ep in entry_points(group="can.interface")}
+    assert "seqpacket" in found and found["seqpacket"].value == "drivers.seqpacket:SeqPacketBus", (
         "reinstall the package (pip install -e .) so python-can finds the seqpacket entry point"
     )
+    assert found["seqpacket"].load() is SeqPacketBus
+    assert can.interfaces.BACKENDS["seqpacket"] == ("drivers.seqpacket", "SeqPacketBus")
 
 
 def test_open_bus_opens_seqpacket(channel: str) -> None:

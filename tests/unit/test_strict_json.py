@@ -9,12 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness import strict_json
-from harness.peaks import Peaks
-from harness.recording import RunFolder, load_run, write_simulation_case
+from harness.recording import RunFolder, load_run, strict_json, write_simulation_case
 from harness.recording.metadata import write_json_atomic
 from harness.report.reference import reference_tables
 from harness.runs.run_context import reference_entry
+from harness.signals.peaks import Peaks
 from harness.simulation.case import CaseResult
 
 NAN, INF = float("nan"), float("inf")

@@ -8,7 +8,7 @@ from scipy import stats
 
 from harness.report.peak_table import NO_REDUCTION
 from harness.sweep.curves import design_curves, fit_lognormal, fragility
-from harness.sweep.summary import SHORT_REDUCTION, design_labels, passive_rows, peaks_table, reduction_table
+from harness.sweep.summary import SHORT_REDUCTION, design_labels, passive_rows, peaks_by_design, reduction_by_design
 
 
 def test_the_fit_recovers_a_known_fragility():
@@ -50,12 +50,12 @@ def _columns():
 
 def test_summary_per_design_and_record():
     columns = _columns()
-    table = reduction_table(columns, [])
+    table = reduction_by_design(columns, [])
     rows = {(row[0], row[1]): dict(zip(table.header, row, strict=True)) for row in table.rows}
     assert set(rows) == {("FSF-I", "a"), ("FSF-I", "b"), ("FSF-I", "all"), ("OF-I", "a"), ("OF-I", "b"), ("OF-I", "all")}
     assert rows[("FSF-I", "all")]["drift median %"] == pytest.approx(50.0)
     assert rows[("OF-I", "a")]["drift max %"] == pytest.approx(90.0) and rows[("OF-I", "all")]["cases"] == 4
-    peaks = peaks_table(columns, [])
+    peaks = peaks_by_design(columns, [])
     assert peaks.rows[0][:2] == ["passive", 4], "the passive simulations are counted once, not once per design"
     assert len(passive_rows(columns)) == 4
 
@@ -64,7 +64,7 @@ def test_the_short_summary_shows_the_worst_growth_of_the_stroke_beside_the_large
     columns = _columns()
     growth = np.array([-10.0, 20.0, 5.0, -60.0, 30.0, 40.0, np.nan, np.nan])  # sliding: grew by 60 % once
     columns["reduction_pct.sliding_displacement_m"] = growth
-    short = reduction_table(columns, []).select(SHORT_REDUCTION)
+    short = reduction_by_design(columns, []).select(SHORT_REDUCTION)
     rows = {(row[0], row[1]): dict(zip(short.header, row, strict=True)) for row in short.rows}
     assert rows[("FSF-I", "all")]["sliding max %"] == pytest.approx(20.0)
     assert rows[("FSF-I", "all")]["sliding min %"] == pytest.approx(-60.0)  # what "max %" alone hid

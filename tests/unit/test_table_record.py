@@ -289,8 +289,8 @@ def _summary(verdict: TableVerdict, ratio: float) -> dict:
 
 
 def test_reductions_are_withheld_on_a_mismatch_flagged_when_marginal_and_shown_on_a_match() -> None:
-    from harness.peaks import Peaks
     from harness.report.tables import reduction_table
+    from harness.signals.peaks import Peaks
 
     passive = Peaks(0.02, 3.0, (0.004, 0.003, 0.002), (2.0, 2.5, 3.0), 0.0)
     controlled = Peaks(0.01, 2.0, (0.002, 0.002, 0.001), (1.0, 1.5, 2.0), 10.0)

@@ -1,4 +1,4 @@
-"""ControlTick's row: every value lands in the column harness.rowlayout names for it."""
+"""ControlTick's row: every value lands in the column harness.signals.columns names for it."""
 
 from __future__ import annotations
 
@@ -6,13 +6,13 @@ import uuid
 
 import pytest
 
-from harness import rowlayout as layout
-from harness.can_config import CanConfig
-from harness.can_link import open_harness, open_rig
+from harness.canbus.config import CanConfig
+from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile
 from harness.safety.supervisor import Supervisor
+from harness.signals import columns as layout
 
 PERIOD_S = 0.002
 # Sensor values on the DBC's grids (1 um, 10 um/s, 2 um drifts, 0.002 m/s^2 floor accelerations).

@@ -15,7 +15,7 @@ import pytest
 from drivers.busload import bus_load, frame_bits
 from drivers.codec import load_protocol
 from drivers.protocol_values import EstopSource, RigCommand
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 from harness.errors import ProfileError
 from harness.loop.trip_outputs import SUPERVISOR_SOURCE, TripOutputs
 from harness.profile import load_profile

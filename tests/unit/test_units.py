@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from harness.units import UnitError, convert, parse_quantity, parse_unit
+from harness.config.units import UnitError, convert, parse_quantity, parse_unit
 
 
 @pytest.mark.parametrize(

@@ -8,8 +8,8 @@ import pytest
 
 from harness.recording import RunFolder, RunFolderError
 from harness.recording.runfolder import check_log_dir
-from harness.rowlayout import canonical_columns
-from harness.writable import directory_problem
+from harness.recording.writable import directory_problem
+from harness.signals.columns import canonical_columns
 
 HAS_PROC = Path("/proc/self").is_dir() and Path("/sys/kernel").is_dir()
 

@@ -10,11 +10,8 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from harness.errors import ProfileError
-from harness.profile import load_profile, parse_overrides
-from harness.schema import DESCRIBE_CHARS, _describe
-from harness.sweep.study import load_study
-from harness.yamlload import (
+from harness.config.schema import DESCRIBE_CHARS, _describe
+from harness.config.yamlload import (
     MAX_DEPTH,
     MAX_VALUES,
     MAX_YAML_CHARS,
@@ -23,6 +20,9 @@ from harness.yamlload import (
     check_expansion,
     load_unique,
 )
+from harness.errors import ProfileError
+from harness.profile import load_profile, parse_overrides
+from harness.sweep.study import load_study
 from tests.conftest import PROFILES
 
 

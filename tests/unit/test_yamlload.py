@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 import yaml
 
+from harness.config.yamlload import DuplicateKeyError, load_unique
 from harness.errors import ProfileError
 from harness.profile import load_profile, parse_overrides
-from harness.yamlload import DuplicateKeyError, load_unique
 from tests.conftest import PROFILES
 
 

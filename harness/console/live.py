@@ -2,7 +2,7 @@
 and floor accelerations, loop health, and the last few events.
 
 The loop writes a :class:`~harness.loop.status.LoopStatus` (shared memory) every tick. On a
-terminal, :class:`LiveConsole` draws it from a child process (:mod:`harness.console_view`),
+terminal, :class:`LiveConsole` draws it from a child process (:mod:`harness.console.view`),
 never from a thread of the loop's process: one render holds the interpreter lock for
 milliseconds, which the loop would see as lateness. While the child draws, the loop's
 process prints nothing.
@@ -215,7 +215,7 @@ def view_command(status_path: str, soft_limit_m: float, hard_limit_m: float, for
                  parent_pid: int, fd: int = 1, width: int | None = None, color_system: str | None = None,
                  force_terminal: bool | None = None, timing_out: str | None = None,
                  alerts: tuple[str, ...] = (), notes: tuple[str, ...] = ()) -> list[str]:
-    """The command line of the console's child process (:mod:`harness.console_view`).
+    """The command line of the console's child process (:mod:`harness.console.view`).
 
     Parameters
     ----------
@@ -242,7 +242,7 @@ def view_command(status_path: str, soft_limit_m: float, hard_limit_m: float, for
     notes : tuple of str
         Yellow lines of the panel (:func:`status_panel`).
     """
-    command = [sys.executable, "-m", "harness.console_view", f"--status={status_path}",
+    command = [sys.executable, "-m", "harness.console.view", f"--status={status_path}",
                f"--soft-limit-m={soft_limit_m!r}", f"--hard-limit-m={hard_limit_m!r}", f"--force-limit-n={force_limit_N!r}",
                f"--title={title}", f"--parent-pid={parent_pid}", f"--fd={fd}", f"--color-system={color_system or 'none'}",
                f"--refresh-hz={REFRESH_HZ!r}"]
@@ -268,7 +268,7 @@ class LiveConsole:
     """Context manager showing a run's status until it ends, drawn by a child process.
 
     On entry, if enabled and the console is the default one or writes to a real terminal,
-    a child process (:mod:`harness.console_view`) attaches to the status block and draws
+    a child process (:mod:`harness.console.view`) attaches to the status block and draws
     the panel at 4 Hz on the same terminal. On exit the status is marked finished, the
     child draws its last frame and exits (killed after :data:`CHILD_EXIT_TIMEOUT_S`), and
     the status block is closed: **the LiveConsole owns the block for the run** and closes

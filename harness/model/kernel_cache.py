@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 #: The files that hold numba kernels which call one another (one folder: :mod:`harness.model`).
-KERNEL_DIR = Path(__file__).resolve().parent / "model"
+KERNEL_DIR = Path(__file__).resolve().parent
 KERNEL_FILES = ("bearing.py", "hydraulics.py", "integrator.py")
 #: Where the fingerprint of the kernels' sources is kept, beside numba's cache files.
 FINGERPRINT_NAME = "kernel_sources.sha256"

@@ -1,7 +1,7 @@
 """The profile's ``can`` section handed to the drivers: a checked, open CAN link from a :class:`CanConfig`.
 
 The drivers take plain arguments, as ``can.Bus`` does (:mod:`drivers.link`); this
-module is the one place that turns the harness's :class:`~harness.can_config.CanConfig`
+module is the one place that turns the harness's :class:`~harness.canbus.config.CanConfig`
 into them. The functions keep the names and the order of checks of the drivers' own
 (:func:`prepare` refuses a configuration before any bus is opened).
 """
@@ -14,7 +14,7 @@ from drivers import link
 from drivers.busload import BusLoad
 from drivers.codec import Protocol
 from drivers.link import HarnessLink, RigLink
-from harness.can_config import CanConfig
+from harness.canbus.config import CanConfig
 
 
 def protocol_arguments(config: CanConfig) -> dict[str, Any]:

@@ -14,7 +14,7 @@ column order; every writer and reader uses the names below:
   :data:`TWIN_COLUMNS`;
 - readers and reports find stories and units with :func:`count_stories` and :func:`unit_of`.
 
-Why a module of its own, at the top of the package: the model, the loop, the twin and the
+Why a module of its own, in a package that imports nothing: the model, the loop, the twin and the
 recorder all need the names, and none should import another's package for them (importing
 :mod:`harness.recording` starts the recorder's machinery; the model is pure). This module
 imports nothing. The recording package re-exports its names for run-folder users.

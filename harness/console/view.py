@@ -1,6 +1,6 @@
 """The live console's child process: draws a run's status from its shared block, at 4 Hz.
 
-Started by :class:`harness.console.LiveConsole` as ``python -m harness.console_view``; its
+Started by :class:`harness.console.live.LiveConsole` as ``python -m harness.console.view``; its
 standard output and error are the loop process's, and its panel goes to ``--fd`` (the
 parent's console). It ignores SIGINT (Ctrl-C belongs to the loop's process, which stops or
 trips the run), attaches to the status block read-only, and redraws until the status is
@@ -8,7 +8,7 @@ marked finished or its parent is gone; then it draws a last frame and exits. If 
 died without closing the block, the child removes the block's file. It runs below the loop
 (no real-time policy, niceness +10).
 
-It imports only rich, numpy, :mod:`harness.loop.status` and :mod:`harness.console`, so it
+It imports only rich, numpy, :mod:`harness.loop.status` and :mod:`harness.console.live`, so it
 starts in a fraction of a second.
 """
 
@@ -30,7 +30,7 @@ from typing import TextIO  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.live import Live  # noqa: E402
 
-from harness.console import LiveConsole  # noqa: E402
+from harness.console.live import LiveConsole  # noqa: E402
 from harness.loop.status import LoopStatus  # noqa: E402
 
 #: How often the finished flag and the parent are checked between frames (s).
@@ -53,8 +53,8 @@ def yield_to_the_loop() -> None:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    """The command line :func:`harness.console.view_command` builds."""
-    parser = argparse.ArgumentParser(prog="python -m harness.console_view", description=__doc__.splitlines()[0])
+    """The command line :func:`harness.console.live.view_command` builds."""
+    parser = argparse.ArgumentParser(prog="python -m harness.console.view", description=__doc__.splitlines()[0])
     parser.add_argument("--status", required=True, help="the status block's file")
     parser.add_argument("--soft-limit-m", type=float, required=True)
     parser.add_argument("--hard-limit-m", type=float, required=True)

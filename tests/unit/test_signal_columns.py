@@ -1,4 +1,4 @@
-"""harness.rowlayout: the one definition of every run's columns, and the orders files keep."""
+"""harness.signals.columns: the one definition of every run's columns, and the orders files keep."""
 
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import pytest
 
 import harness.recording as recording
 from drivers.codec import load_protocol
-from harness import rowlayout as layout
 from harness.recording.layout import check_columns
 from harness.rig.sensors import SIGNALS
+from harness.signals import columns as layout
 
 #: signals.csv of a run or dry run, column by column, as written before the layout moved here
 #: (``estimated_nu`` was then called ``hysteretic_nu``). Reordering it breaks readers' scripts.

@@ -5,8 +5,8 @@ Defaults fit 500 Hz control on a 1 Mbit/s bus with about 30 % load (see
 rate from one field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
 control, drive reset) are budgeted at the rate they may burst at.
 
-The section is the harness's (built and checked by :mod:`harness.schema`); the
-drivers never see it. :mod:`harness.can_link` hands its values to the drivers as
+The section is the harness's (built and checked by :mod:`harness.config.schema`); the
+drivers never see it. :mod:`harness.canbus.link` hands its values to the drivers as
 plain arguments (interface, channel, bitrate, rates as a mapping, ...).
 """
 
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from drivers.protocol_values import CURRENT_PROTOCOL_VERSION
-from harness.schema import quantity
+from harness.config.schema import quantity
 
 #: DBC message name -> the CanConfig field holding its rate (Hz).
 RATE_FIELDS: dict[str, str] = {

@@ -23,8 +23,8 @@ import typing
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Literal, TypeVar, Union, get_args, get_origin, get_type_hints
 
+from harness.config.units import UnitError, parse_quantity
 from harness.errors import ProfileError
-from harness.units import UnitError, parse_quantity
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance

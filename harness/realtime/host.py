@@ -15,7 +15,7 @@ import gc
 import os
 from dataclasses import dataclass, field
 
-from harness.schema import quantity
+from harness.config.schema import quantity
 
 _MCL_CURRENT, _MCL_FUTURE = 1, 2
 

@@ -1,9 +1,9 @@
-"""A python-can interface over Unix ``SOCK_SEQPACKET`` sockets: a CAN bus between processes on one host.
+"""The ``seqpacket`` bus: a CAN bus between the processes of one host over Unix ``SOCK_SEQPACKET`` sockets.
 
-Interface name ``seqpacket``. Two or more processes that open the same channel share
-a broadcast "CAN bus" with no set-up: no root, no kernel module, no daemon. The
-default dry run uses it to run the virtual rig in its own process while the
-harness loop (500 Hz, soft real time) and the rig both talk python-can's Bus API.
+Interface name ``seqpacket`` (:mod:`drivers.seqpacket`). Two or more processes that
+open the same channel share a broadcast "CAN bus" with no set-up: no root, no kernel
+module, no daemon. The default dry run uses it to run the virtual rig in its own process
+while the harness loop (500 Hz, soft real time) and the rig both talk python-can's Bus API.
 
 Topology
 --------
@@ -23,14 +23,6 @@ When the hub goes away, its peers see end-of-file or a reset, drop the connectio
 and on later calls retry (at most every :data:`RETRY_INTERVAL_S`) to connect or to
 become the hub themselves. Frames sent while no other node is connected are dropped
 silently, as on a bus with no other node.
-
-Channels
---------
-A plain name (``harness``, or ``@harness``) is the Linux abstract socket address
-``"\\0shaketable-can/harness"``: no file, freed by the kernel when the hub exits.
-A channel containing ``/`` is a filesystem path; a stale socket file there (connect
-refused) is unlinked before binding, and the hub unlinks the file it created on
-shutdown.
 
 Why SEQPACKET, and the cost of each call
 ----------------------------------------
@@ -57,9 +49,8 @@ buffer asked for (:data:`SOCKET_BUFFER_BYTES`, which the kernel doubles) holds ~
 frames, over 1 s at 2500 frames/s, where ``net.core.wmem_max`` allows it (a warning is
 logged when the kernel grants less).
 
-Wire format: :data:`HEADER` (``<IBB``: arbitration ID, flags, DLC) followed by the data
-(at most 64 bytes), one datagram per frame. The receiver stamps ``timestamp =
-time.time()`` on arrival (the same wall clock as the sender's, so the two compare).
+Channels are :mod:`drivers.seqpacket.channel`'s, the datagram of a frame is
+:mod:`drivers.seqpacket.wire`'s.
 """
 
 from __future__ import annotations
@@ -68,34 +59,23 @@ import errno
 import fcntl
 import logging
 import os
-import re
 import select
 import socket
 import stat
-import struct
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass
 from typing import Any
 
 import can
 from can import BusABC, CanOperationError, CanProtocol, Message
 
 from drivers.errors import BusError
+from drivers.seqpacket.channel import ABSTRACT_PREFIX, parse_channel
+from drivers.seqpacket.wire import MAX_DATAGRAM_BYTES, decode_frame, encode_frame
 
 LOG = logging.getLogger(__name__)
 
-#: python-can interface name.
-INTERFACE = "seqpacket"
-#: Abstract-namespace prefix of plain channel names (the leading NUL makes it abstract).
-ABSTRACT_PREFIX = "\0shaketable-can/"
-#: Frame header: arbitration ID, flags (``FLAG_*``), DLC; the data follows.
-HEADER = struct.Struct("<IBB")
-#: Largest data field (bytes; CAN FD).
-MAX_DATA_BYTES = 64
-#: Largest valid datagram (bytes).
-MAX_DATAGRAM_BYTES = HEADER.size + MAX_DATA_BYTES
 #: ``SO_SNDBUF``/``SO_RCVBUF`` asked for each socket (bytes; the kernel doubles it, up to ``wmem_max``).
 SOCKET_BUFFER_BYTES = 1 << 20
 #: Kernel accounting per queued small datagram (bytes, skb truesize measured on Linux 6.x).
@@ -109,173 +89,11 @@ ACCEPT_CHECK_INTERVAL_S = 0.01
 #: Pending connections the hub's listening socket holds before connects fail with EAGAIN.
 LISTEN_BACKLOG = 64
 
-FLAG_EXTENDED = 0x01
-FLAG_REMOTE = 0x02
-FLAG_ERROR = 0x04
-FLAG_FD = 0x08
-FLAG_BRS = 0x10
-FLAG_ESI = 0x20
-
 _SEND_FLAGS = socket.MSG_DONTWAIT | socket.MSG_NOSIGNAL
 _RECV_FLAGS = socket.MSG_DONTWAIT
-_NAME_RE = re.compile(r"[A-Za-z0-9_.:+=-]+")
-_MAX_NAME_BYTES = 108 - len(ABSTRACT_PREFIX)  # sun_path holds 108 bytes
-_MAX_PATH_BYTES = 107  # sun_path minus the terminating NUL
 _NOT_LISTENING = (errno.ECONNREFUSED, errno.ENOENT)
 _PEER_GONE = (errno.EPIPE, errno.ECONNRESET, errno.ECONNREFUSED, errno.ENOTCONN, errno.ECONNABORTED, errno.EBADF)
 _warned_small_buffer = False
-
-
-@dataclass(frozen=True)
-class ChannelAddress:
-    """Where a channel's hub listens.
-
-    Attributes
-    ----------
-    name : str
-        The channel as given (``harness``, ``@harness`` or a path).
-    address : str
-        What ``bind``/``connect`` take: ``"\\0shaketable-can/<name>"`` or the path.
-    path : str or None
-        The filesystem path, or None for an abstract address.
-    """
-
-    name: str
-    address: str
-    path: str | None
-
-
-def parse_channel(channel: object) -> ChannelAddress:
-    """Map a channel name to its socket address.
-
-    Parameters
-    ----------
-    channel : str
-        A plain name such as ``harness`` or ``@harness`` (abstract address, no file), or a
-        path containing ``/`` such as ``/tmp/rig.sock`` (a socket file).
-
-    Returns
-    -------
-    ChannelAddress
-
-    Raises
-    ------
-    BusError
-        Not a string, empty, illegal characters, too long, or a path whose directory is missing.
-    """
-    expected = (
-        "expected a name of letters, digits and ._:+=- such as 'harness' (an abstract socket, no file) "
-        "or a socket path containing '/' such as '/tmp/rig.sock'"
-    )
-    if not isinstance(channel, str):
-        raise BusError(f"seqpacket channel {channel!r} is a {type(channel).__name__}; {expected}")
-    if "\0" in channel:
-        raise BusError(f"seqpacket channel {channel!r} contains a NUL byte; {expected}")
-    if "/" in channel:
-        return _parse_path(channel, expected)
-    name = channel[1:] if channel.startswith("@") else channel
-    if not _NAME_RE.fullmatch(name):
-        raise BusError(f"seqpacket channel {channel!r} is not a usable name; {expected}")
-    if len(name.encode()) > _MAX_NAME_BYTES:
-        raise BusError(
-            f"seqpacket channel {channel!r} is {len(name)} characters; at most {_MAX_NAME_BYTES} fit an abstract socket address"
-        )
-    return ChannelAddress(channel, ABSTRACT_PREFIX + name, None)
-
-
-def _parse_path(channel: str, expected: str) -> ChannelAddress:
-    size = len(os.fsencode(channel))
-    if size > _MAX_PATH_BYTES:
-        raise BusError(f"seqpacket channel path {channel!r} is {size} bytes; a Unix socket path holds at most {_MAX_PATH_BYTES}")
-    if channel.endswith("/"):
-        raise BusError(f"seqpacket channel path {channel!r} names a directory; {expected}")
-    directory = os.path.dirname(channel) or "."
-    if not os.path.isdir(directory):
-        raise BusError(f"seqpacket channel path {channel!r}: directory {directory!r} does not exist; create it first")
-    return ChannelAddress(channel, channel, channel)
-
-
-def register() -> None:
-    """Make ``can.Bus(interface="seqpacket")`` work without the installed entry point.
-
-    Adds the interface to ``can.interfaces.BACKENDS``. python-can checks names against
-    ``VALID_INTERFACES``, a frozenset built at import and imported by value into
-    ``can.util`` and ``can``, so those three module attributes are rebound to a set
-    with the name added. A no-op when the entry point already registered it.
-    """
-    can.interfaces.BACKENDS.setdefault(INTERFACE, (__name__, "SeqPacketBus"))
-    valid = can.interfaces.VALID_INTERFACES
-    if INTERFACE in valid:
-        return
-    widened = frozenset(valid | {INTERFACE})
-    for module in (can.interfaces, can.util, can):
-        if getattr(module, "VALID_INTERFACES", None) is valid:
-            module.VALID_INTERFACES = widened  # type: ignore[attr-defined]
-
-
-def encode_frame(msg: Message) -> bytes:
-    """One frame's datagram: :data:`HEADER` then the data.
-
-    Raises
-    ------
-    ValueError
-        More than 64 data bytes, or an ID or DLC that does not fit the header.
-    """
-    flags = 0
-    if msg.is_extended_id:
-        flags |= FLAG_EXTENDED
-    if msg.is_remote_frame:
-        flags |= FLAG_REMOTE
-    if msg.is_error_frame:
-        flags |= FLAG_ERROR
-    if msg.is_fd:
-        flags |= FLAG_FD
-        if msg.bitrate_switch:
-            flags |= FLAG_BRS
-        if msg.error_state_indicator:
-            flags |= FLAG_ESI
-    data = msg.data
-    if len(data) > MAX_DATA_BYTES:
-        raise ValueError(f"frame 0x{msg.arbitration_id:x} has {len(data)} data bytes; at most {MAX_DATA_BYTES}")
-    try:
-        return HEADER.pack(msg.arbitration_id, flags, msg.dlc) + data
-    except struct.error as err:
-        raise ValueError(f"frame ID {msg.arbitration_id!r} or DLC {msg.dlc!r} does not fit a CAN frame: {err}") from err
-
-
-#: Every attribute python-can's Message.__init__ sets. When they are exactly its slots, a received
-#: frame skips the keyword call (a third of its cost, once per frame per tick): the object is
-#: made bare and every field set below; otherwise ``Message()`` makes it and the same lines set it.
-_MESSAGE_FIELDS = frozenset({
-    "timestamp", "arbitration_id", "is_extended_id", "is_remote_frame", "is_error_frame", "channel", "is_fd",
-    "is_rx", "bitrate_switch", "error_state_indicator", "data", "dlc",
-})
-_BARE_MESSAGE_OK = set(getattr(Message, "__slots__", ())) - {"__weakref__"} == _MESSAGE_FIELDS
-
-
-def _new_message() -> Message:
-    return Message.__new__(Message) if _BARE_MESSAGE_OK else Message()
-
-
-def decode_frame(buf: bytearray, size: int, channel: str) -> Message | None:
-    """The Message in ``buf[:size]``, stamped ``time.time()``; None when malformed."""
-    if size < HEADER.size or size > MAX_DATAGRAM_BYTES:
-        return None
-    arbitration_id, flags, dlc = HEADER.unpack_from(buf)
-    msg = _new_message()
-    msg.timestamp = time.time()
-    msg.arbitration_id = arbitration_id
-    msg.is_extended_id = bool(flags & FLAG_EXTENDED)
-    msg.is_remote_frame = bool(flags & FLAG_REMOTE)
-    msg.is_error_frame = bool(flags & FLAG_ERROR)
-    msg.is_fd = bool(flags & FLAG_FD)
-    msg.bitrate_switch = bool(flags & FLAG_BRS)
-    msg.error_state_indicator = bool(flags & FLAG_ESI)
-    msg.dlc = dlc
-    msg.data = bytearray() if flags & FLAG_REMOTE else buf[HEADER.size:size]
-    msg.channel = channel
-    msg.is_rx = True
-    return msg
 
 
 class SeqPacketBus(BusABC):
@@ -771,7 +589,3 @@ class _DirectoryLock:
         fcntl.flock(self._fd, fcntl.LOCK_UN)
         os.close(self._fd)
 
-
-__all__ = ["SeqPacketBus", "parse_channel", "register", "encode_frame", "decode_frame", "INTERFACE"]
-
-register()  # importing this module makes can.Bus(interface="seqpacket") work, entry point or not

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from harness.rowlayout import (
+from harness.signals.columns import (
     BASE_ACCELERATION,
     FORCE_COMMAND,
     FORCE_MEASURED,
@@ -156,7 +156,7 @@ def peak_responses(
     Parameters
     ----------
     columns : mapping of str to ndarray
-        Columns named as in :mod:`harness.rowlayout` (``drift_j_m``,
+        Columns named as in :mod:`harness.signals.columns` (``drift_j_m``,
         ``floor_acceleration_j_m_s2``, ``sliding_displacement_m``, ``base_acceleration_m_s2``,
         a force column of :data:`FORCE_COLUMNS`, ...). Any may be absent: its peak is NaN.
     total_weight_N : float or None
