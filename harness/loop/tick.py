@@ -22,7 +22,7 @@ from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
 from harness.loop.trip_outputs import TripOutputs
 from harness.memory import float_view
-from harness.safety.events import bit
+from harness.safety.checks import bit
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor

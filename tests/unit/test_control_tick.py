@@ -292,7 +292,7 @@ class _Flags:
     ("error_passive", "bus_error_passive", State.STOPPING),  # safe_stop by default
 ])
 def test_each_flag_the_drivers_report_reaches_the_supervisor_through_the_tick(bench, monkeypatch, fault, reason, state):
-    from harness.safety.events import bit
+    from harness.safety.checks import bit
 
     b = bench()
     b.run_until_running()

@@ -142,8 +142,8 @@ def test_a_base_exception_inside_a_tick_also_sends_the_trips_estop(bench) -> Non
 
     from harness.loop.tick import ControlTick
     from harness.loop.trip_outputs import SUPERVISOR_SOURCE
+    from harness.safety.checks import CHECK_NAMES
     from harness.safety.config import TripActionsConfig
-    from harness.safety.events import CHECK_NAMES
     from harness.safety.supervisor import Supervisor
 
     safety = dataclasses.replace(bench.supervisor.config, trip_actions=TripActionsConfig(internal=("disable", "estop")))

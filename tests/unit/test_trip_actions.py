@@ -19,8 +19,8 @@ from harness.can_config import CanConfig
 from harness.errors import ProfileError
 from harness.loop.trip_outputs import SUPERVISOR_SOURCE, TripOutputs
 from harness.profile import load_profile
+from harness.safety.checks import CHECK_NAMES
 from harness.safety.config import EStopConfig, TripActionsConfig, check_config
-from harness.safety.events import CHECK_NAMES
 from harness.safety.lifecycle import ArmRefused, State
 from tests.unit.test_control_tick import PERIOD_S, Bench
 
