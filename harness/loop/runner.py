@@ -20,7 +20,7 @@ from harness.errors import SafetyError
 from harness.loop.config import LoopConfig
 from harness.loop.operator import OperatorSignals
 from harness.loop.realtime import apply_realtime, restore_realtime
-from harness.loop.status import LoopStatus  # re-exported: it lived here before
+from harness.loop.status import LoopStatus
 from harness.loop.tick import ControlTick
 from harness.loop.timing import TimingStats
 from harness.recording.layout import Outcome

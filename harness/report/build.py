@@ -48,7 +48,7 @@ REPORT_HTML = "report.html"
 SUMMARY_TXT = "summary.txt"
 MAX_COMPARISONS = 6
 
-__all__ = ["ReportResult", "build_report", "load_labelled", "summary_text"]
+__all__ = ["ReportResult", "build_report", "load_labelled"]
 
 
 @dataclass
