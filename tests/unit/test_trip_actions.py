@@ -59,7 +59,7 @@ def _bench(safety=None, stop_table: bool = True) -> tuple[Bench, Wire]:
     if stop_table:
         b.tick.trip_outputs.stop_table = lambda now: b.link.writer.rig_control(STOP_TABLE, False, now)
     wire = Wire()
-    b.rig.reader.tap = wire
+    b.rig_side.tap = wire
     return b, wire
 
 
