@@ -61,7 +61,7 @@ NUMBER_FIELDS = (
     ("send_failures", True, "frames that could not be sent"),
     ("stalls", True, "stalls ridden through (two periods or more between two ticks' starts, within budget)"),
     ("longest_stall_s", False, "longest time between the starts of two consecutive ticks in a stall (s)"),
-    ("missed_periods", True, "tick periods skipped by the scheduler"),
+    ("missed_periods", True, "whole periods missed in stalls (the gaps between two ticks' starts), in total"),
     ("fault_code", True, "the servo's fault code in the latest ACTUATOR_STATUS (drivers.protocol_values.FaultCode); 0 none"),
     ("n_stories", True, "stories whose drift and floor acceleration are published (set_story); 0 none"),
     ("table_verdict", True, "the table against its record: a code of TABLE_VERDICT_NAMES"),
@@ -233,7 +233,7 @@ class LoopStatus:
     longest_stall_s : float
         Longest gap between two ticks' commands (s).
     missed_periods : int
-        Tick periods the scheduler skipped.
+        Whole periods missed in stalls, in total.
     fault_code : int
         The servo's fault code in the latest ACTUATOR_STATUS (0 none).
     n_stories : int
