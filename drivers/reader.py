@@ -1,10 +1,10 @@
 """Receive side: poll the bus inside the tick and keep the latest valid sample of each message.
 
 The loop calls :meth:`FrameReader.poll` once per tick; it drains the bus with
-``bus.recv(timeout=0)`` (no Notifier thread: a thread adds ~80 us median and
-milliseconds at the tail, see DESIGN.md), decodes every frame through the
-:class:`~drivers.codec.Decoder`, and updates preallocated :class:`Sample` objects
-in place. Besides the samples it keeps:
+``bus.recv(timeout=0)`` (no Notifier thread: a thread adds ~80 us median and milliseconds
+at the tail, benchmarks/README.md, "Timing facts the loop is built on"), decodes every
+frame through the :class:`~drivers.codec.Decoder`, and updates preallocated
+:class:`Sample` objects in place. Besides the samples it keeps:
 
 - error-frame and bus-off accounting in a shared :class:`~drivers.bus.BusHealth`;
 - frames on "foreign" IDs, by default the actuator command: any such frame that this

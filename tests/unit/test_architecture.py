@@ -1,7 +1,7 @@
 """The layering of the project, read from the source with :mod:`ast` (nothing is imported).
 
 - ``drivers/`` imports nothing from ``harness/``: the drivers know CAN and units, not the
-  profile, the controller or the supervisor (DESIGN.md, "one direction").
+  profile, the controller or the supervisor (docs/ARCHITECTURE.md, "One direction").
 - No two modules import each other, even inside a function: the import graph has no cycle.
 - Imports run one way, from the top down: the command line and the commands, then the
   runs, then the loop and the simulation, then the rig, control and safety, then the model,

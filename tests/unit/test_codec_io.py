@@ -1,4 +1,4 @@
-"""drivers/reader.py, drivers/rig_reader.py, drivers/writer.py and drivers/bus.BusHealth: samples, ages, counters, accounting."""
+"""drivers/reader.py, drivers/rig_reader.py, drivers/writer.py and drivers/bus.py's BusHealth: samples, ages, counters."""
 
 from __future__ import annotations
 
