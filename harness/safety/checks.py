@@ -15,9 +15,10 @@ bit, wherever it stands in the order (logs/README.md lists them).
 
 To add a check: write its class (the five documentation attributes of :class:`DocumentedCheck`;
 a :class:`~harness.safety.detector_base.Detector` unless the supervisor performs it inline), add
-one :class:`Check` here at its place in the order with the next bit, and give it a row in
-docs/SAFETY.md and a line in logs/README.md (tests/unit/test_safety_checks.py,
-tests/unit/test_safety_doc.py and tests/unit/test_logs_readme.py fail until all agree).
+one :class:`Check` here at its place in the order with the next bit, give it a trip class in
+:data:`harness.safety.config.TRIP_CLASS_OF` if it can trip, a row in docs/SAFETY.md and a line in
+logs/README.md (tests/unit/test_safety_checks.py, test_trip_actions.py, test_safety_doc.py and
+test_logs_readme.py fail until all agree). docs/ARCHITECTURE.md has the whole recipe.
 """
 
 from __future__ import annotations
