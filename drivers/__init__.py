@@ -12,7 +12,8 @@ they take plain arguments, as ``can.Bus`` does, and the harness adapts its profi
 - :mod:`drivers.measurements`: :class:`~drivers.measurements.Measurements`, the decoded control sample.
 - :mod:`drivers.busload`: worst-case bus load and the refusal above the allowed share.
 - :mod:`drivers.bus`: :func:`~drivers.bus.open_bus` for any python-can interface; error-frame and send-failure accounting.
-- :mod:`drivers.reader` / :mod:`drivers.writer`: poll-in-the-tick readers and preallocated-frame writers, harness and rig side.
+- :mod:`drivers.reader` / :mod:`drivers.writer`: the harness's poll-in-the-tick reader; preallocated-frame writers, both sides.
+- :mod:`drivers.rig_reader`: the rig's reader, one frame at a time (every command frame is an event).
 - :mod:`drivers.link`: one call to a checked, open link with its reader and writer.
 - :mod:`drivers.seqpacket`: the ``seqpacket`` python-can interface (Unix SOCK_SEQPACKET hub): channel, wire format, bus.
 

@@ -3,8 +3,10 @@
 :func:`prepare` does everything that can refuse a configuration before the bus is
 opened (so nothing is ever sent with a refused configuration): load and compile
 the DBC, check its protocol version against the expected one, check the bus load.
-:func:`open_harness` and :func:`open_rig` then open the bus and build the side's
-reader and writer around one shared :class:`~drivers.bus.BusHealth`.
+:func:`open_harness` then opens the bus and builds the harness's reader and writer around
+one shared :class:`~drivers.bus.BusHealth`; :func:`open_rig` builds the rig's writer. The rig
+reads frame by frame on its own clock, so it builds its :class:`~drivers.rig_reader.RigReader`
+itself, on the link's bus.
 
 Like ``can.Bus``, these take plain arguments (interface, channel, bitrate, rates as a
 mapping, DBC path); the harness adapts its profile's ``can`` section to them
@@ -24,7 +26,7 @@ from drivers.bus import BusHealth, open_bus
 from drivers.busload import BusLoad, check_bus_load
 from drivers.codec import Protocol, check_protocol_version, load_protocol
 from drivers.protocol_values import CURRENT_PROTOCOL_VERSION
-from drivers.reader import HarnessReader, RigReader
+from drivers.reader import HarnessReader
 from drivers.writer import HarnessWriter, RigWriter
 
 
@@ -113,9 +115,8 @@ class HarnessLink(_Link):
 
 @dataclass
 class RigLink(_Link):
-    """The rig side: :class:`RigReader` (commands, heartbeat, rig control, E-stop) and :class:`RigWriter`."""
+    """The rig side: :class:`RigWriter` (the rig receives through :class:`~drivers.rig_reader.RigReader` on ``bus``)."""
 
-    reader: RigReader
     writer: RigWriter
 
     def __enter__(self) -> RigLink:
@@ -170,12 +171,9 @@ def open_rig(
     max_bus_load: float = 0.5,
     protocol_version: int = CURRENT_PROTOCOL_VERSION,
     dbc_path: str | Path | None = None,
-    use_msg_timestamp: bool = False,
-    max_frames_per_poll: int = 256,
 ) -> RigLink:
-    """Check the settings, then open the bus for the rig side (the virtual rig); parameters as :func:`open_harness`."""
+    """Check the settings, then open the bus for the rig side (the virtual rig); parameters as :func:`prepare`."""
     bus, protocol, load, health = _checked_bus(
         interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path
     )
-    reader = RigReader(bus, protocol, health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames_per_poll)
-    return RigLink(bus, protocol, load, health, reader, RigWriter(bus, protocol, health))
+    return RigLink(bus, protocol, load, health, RigWriter(bus, protocol, health))

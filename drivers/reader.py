@@ -1,10 +1,10 @@
 """Receive side: poll the bus inside the tick and keep the latest valid sample of each message.
 
 The loop calls :meth:`FrameReader.poll` once per tick; it drains the bus with
-``bus.recv(timeout=0)`` (no Notifier thread: a thread adds ~80 us median and
-milliseconds at the tail, see DESIGN.md), decodes every frame through the
-:class:`~drivers.codec.Decoder`, and updates preallocated :class:`Sample` objects
-in place. Besides the samples it keeps:
+``bus.recv(timeout=0)`` (no Notifier thread: a thread adds ~80 us median and milliseconds
+at the tail, benchmarks/README.md, "Timing facts the loop is built on"), decodes every
+frame through the :class:`~drivers.codec.Decoder`, and updates preallocated
+:class:`Sample` objects in place. Besides the samples it keeps:
 
 - error-frame and bus-off accounting in a shared :class:`~drivers.bus.BusHealth`;
 - frames on "foreign" IDs, by default the actuator command: any such frame that this
@@ -38,7 +38,7 @@ from drivers.protocol_values import DriveState, EstopSource
 
 #: What the harness receives (sensors, actuator status, rig status, E-stop).
 HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
-#: What the rig (servo controller and virtual rig) receives.
+#: What the rig (servo controller and virtual rig) receives (:class:`drivers.rig_reader.RigReader`).
 RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP", "DRIVE_RESET")
 ESTOP_MESSAGE = "ESTOP"
 #: ESTOP ``source`` of the operator panel (the DBC's value table, :class:`~drivers.protocol_values.EstopSource`).
@@ -49,6 +49,20 @@ FUTURE_TOLERANCE_S = 0.001
 CONTROL_MEASUREMENTS = ("TABLE_SENSORS", "BASE_SENSORS")
 #: Drive states in which the drive can apply force when enabled.
 _DRIVE_READY_STATES = frozenset({DriveState.READY, DriveState.ENABLED})
+#: Outcomes of a frame whose content cannot be read at all (unlike a bad counter or an out-of-range value).
+_UNREADABLE = (RxStatus.NOT_DATA, RxStatus.WRONG_LENGTH, RxStatus.BAD_CRC)
+
+
+def damaged_estop(status: RxStatus) -> bool:
+    """True when a frame on the E-stop ID arrived too damaged to read: it counts as a stop request.
+
+    Fail-safe: a stop request that arrives damaged is still a stop request. The harness's
+    reader latches :attr:`FrameReader.estop_requested` on it and the rig's reader
+    (:class:`drivers.rig_reader.RigReader`) reports it as an E-stop. ``status`` is the
+    decoder's outcome for that frame: not a data frame, a wrong length or a bad CRC is damaged;
+    ``OK``, a bad counter or an out-of-range value left the frame readable.
+    """
+    return status in _UNREADABLE
 
 
 class Sample:
@@ -349,12 +363,12 @@ class FrameReader:
             if values[self._estop_source] == PANEL_SOURCE:
                 self.counters.panel_frames += 1
                 self.counters.last_panel_time = t
-        elif status in (RxStatus.REPEATED_COUNTER, RxStatus.SKIPPED_COUNTER, RxStatus.OUT_OF_RANGE):
+        elif damaged_estop(status):
+            active = 1.0
+        else:  # intact, but out of sequence or out of range: what does it ask for?
             codec = self.protocol.by_id[self._estop_id]
             codec.unpack(data, self._estop_scratch)  # CRC and length are fine here
             active = self._estop_scratch[self._estop_active]
-        else:
-            active = 1.0  # damaged stop request: fail safe
         if active:
             self.estop_requested = True
 
@@ -429,21 +443,3 @@ class HarnessReader(FrameReader):
     def sensor_age(self, now: float) -> float:
         """Age of the older of the table and base-mat samples (s; infinity before both arrived)."""
         return max(self.table.age(now), self.base.age(now))
-
-
-class RigReader(FrameReader):
-    """The rig side (virtual rig, servo controller): commands, heartbeat, rig control, E-stop, drive reset.
-
-    Parameters are those of :class:`HarnessReader`.
-    """
-
-    def __init__(
-        self, bus: can.BusABC, protocol: Protocol, health: BusHealth | None = None, *,
-        use_msg_timestamp: bool = False, max_frames: int = 256,
-    ):
-        super().__init__(
-            bus, protocol, RIG_RX, health=health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames,
-        )
-        self.command = self.sample("ACTUATOR_CMD")
-        self.heartbeat = self.sample("HEARTBEAT")
-        self.control = self.sample("RIG_CONTROL")

@@ -27,13 +27,20 @@ def protocol_arguments(config: CanConfig) -> dict[str, Any]:
 
 
 def link_arguments(config: CanConfig) -> dict[str, Any]:
-    """Keyword arguments of :func:`drivers.link.open_harness` and :func:`drivers.link.open_rig` for ``config``."""
+    """Keyword arguments of :func:`drivers.link.open_rig` for ``config`` (the bus and its checks)."""
     return {
         "interface": config.interface,
         "channel": config.channel,
         "bitrate_bps": config.bitrate_bps,
         "rates_hz": config.rates_hz(),
         **protocol_arguments(config),
+    }
+
+
+def harness_link_arguments(config: CanConfig) -> dict[str, Any]:
+    """Keyword arguments of :func:`drivers.link.open_harness` for ``config``: those of the rig, and the reader's."""
+    return {
+        **link_arguments(config),
         "use_msg_timestamp": config.timestamp_source == "message",
         "max_frames_per_poll": config.max_frames_per_poll,
     }
@@ -62,7 +69,7 @@ def open_harness(config: CanConfig) -> HarnessLink:
     BusError
         The bus cannot be opened (says how to fix it).
     """
-    return link.open_harness(**link_arguments(config))
+    return link.open_harness(**harness_link_arguments(config))
 
 
 def open_rig(config: CanConfig) -> RigLink:

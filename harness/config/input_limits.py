@@ -2,9 +2,10 @@
 
 Every bound here caps something real: an allocation that grows with the number (samples of a
 simulation, rows of a run, slots of a detector's window), or what the rig and the CAN bus can do.
-The command line checks its options against them when it parses them (``harness/cli.py``) and
-the profile schema declares the same bounds on the matching keys, so ``--rate``, a profile's
-``control.rate_hz`` and ``--set`` all refuse the same values with the same reason.
+The command line checks its options against them when it parses them
+(``harness/commands/options.py``) and the profile schema declares the same bounds on the
+matching keys, so ``--rate``, a profile's ``control.rate_hz`` and ``--set`` all refuse the same
+values with the same reason.
 
 This module imports nothing heavy: the command line uses it before it loads numpy.
 """
@@ -14,9 +15,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 #: Fastest loop or controller sample rate (Hz): the loop schema's bound (``loop.rate_hz <= 5000``,
-#: harness/loop/config.py). A Python tick computes in about 100 us and the host stalls for 0.2-1 ms
-#: (DESIGN.md, timing facts), so a faster loop cannot keep its deadlines; a simulation faster than
-#: any loop would predict a test nobody can run. Below this bound the virtual rig's physics
+#: harness/loop/config.py). A Python tick computes in one to a few hundred us and the host stalls for
+#: 0.2-1 ms and more (benchmarks/README.md: "Timing facts the loop is built on", "Loop compute budget"),
+#: so a faster loop cannot keep its deadlines; a simulation faster than any loop would predict a
+#: test nobody can run. Below this bound the virtual rig's physics
 #: sub-step (0.5 ms) and the CAN bus load check refuse, with their own figures, rates the rig or
 #: the bus cannot serve.
 MAX_RATE_HZ = 5000.0

@@ -19,7 +19,6 @@ import os
 import signal
 import subprocess
 import sys
-from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.panel import Panel
@@ -29,9 +28,6 @@ from rich.text import Text
 from drivers.protocol_values import FaultCode
 from harness.loop.status import TABLE_VERDICT_NAMES, LoopStatus
 from harness.paths import PROJECT_ROOT
-
-if TYPE_CHECKING:
-    from harness.loop.timing import TimingStats
 
 _STATE_STYLE = {"IDLE": "dim", "ARMED": "yellow", "RUNNING": "green", "STOPPING": "yellow", "DONE": "cyan", "TRIPPED": "bold red"}
 #: How long :meth:`LiveConsole.__exit__` waits for the child to draw its last frame and exit (s).
@@ -284,8 +280,6 @@ class LiveConsole:
     soft_limit_m, hard_limit_m, force_limit_N : float
         For the bars (m, m, N).
     title : str
-    timing : TimingStats, optional
-        Accepted for compatibility; unused (the lateness percentiles come from the status's ring).
     console : Console, optional
         Where to draw; the default Console (standard output) if None.
     enabled : bool
@@ -297,12 +291,11 @@ class LiveConsole:
     """
 
     def __init__(self, status: LoopStatus, soft_limit_m: float, hard_limit_m: float, force_limit_N: float,
-                 title: str, timing: TimingStats | None = None, console: Console | None = None, enabled: bool = True,
+                 title: str, console: Console | None = None, enabled: bool = True,
                  alerts: tuple[str, ...] = (), notes: tuple[str, ...] = ()):
         self.status = status
         self.alerts = tuple(alerts)
         self.notes = tuple(notes)
-        self.timing = timing
         self.soft, self.hard, self.force_limit = soft_limit_m, hard_limit_m, force_limit_N
         self.title = title
         self.console_given = console is not None

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from harness.errors import SafetyError
 from harness.loop.config import LoopConfig
 from harness.loop.operator import OperatorSignals
-from harness.loop.status import LoopStatus  # re-exported: it lived here before
+from harness.loop.status import LoopStatus
 from harness.loop.tick import ControlTick
 from harness.loop.timing import TimingStats
 from harness.realtime.host import apply_realtime, restore_realtime
@@ -117,6 +117,10 @@ class ControlLoop:
         self.stalls = 0
         #: Longest time between the starts of two consecutive ticks so far, counted when a stall (s).
         self.longest_stall_s = 0.0
+        #: Whole periods missed in stalls so far, beyond the budget too (the sum of the rows' ``overrun`` column).
+        #: The scheduler's ``overruns`` counts the deadlines it skipped instead: the same events seen from the
+        #: deadlines, not from the gaps between ticks (a late wake-up is a stall it does not count).
+        self.missed_periods = 0
         #: The stall budget (s): ridden through up to here, tripped beyond (the supervisor's ``loop_stall``).
         self.max_stall_s = tick.supervisor.config.run.max_stall_s
 
@@ -191,6 +195,7 @@ class ControlLoop:
         missed = int(stall_s / self.period_s + 1e-9) - 1
         if missed < 1:
             return 0
+        self.missed_periods += missed
         self.longest_stall_s = max(self.longest_stall_s, stall_s)
         if stall_s <= self.max_stall_s:
             self.stalls += 1
@@ -230,9 +235,8 @@ class ControlLoop:
                     health.operator_stop = self.signals.stop_requested
                     health.operator_trip = self.signals.trip_requested
                     health.record_time_s = t - run_started if run_started is not None and not self._awaiting_table else math.nan
-                    started, cpu_started = time.perf_counter(), time.thread_time()
                     command = tick.run(t, dt, t, lateness, stall_s, missed, self.lockstep is None)
-                    timing.add(lateness, time.perf_counter() - started, time.thread_time() - cpu_started)
+                    timing.add(lateness, tick.compute_s, tick.cpu_s)
                     run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
                     self._update_status(t, run_started, duration_s, command, lateness)
                     k += 1
@@ -304,7 +308,7 @@ class ControlLoop:
         status.send_failures = health.send_failures
         status.stalls = self.stalls
         status.longest_stall_s = self.longest_stall_s
-        status.missed_periods = scheduler.overruns
+        status.missed_periods = self.missed_periods
         status.last_event = tick.last_event
         status.trip_reason = command.trip_reason
         table = tick.supervisor.table_record

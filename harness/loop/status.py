@@ -50,7 +50,7 @@ class LoopStatus(StatusBlock):
     send_failures = IntField("frames that could not be sent")
     stalls = IntField("stalls ridden through (two periods or more between two ticks' starts, within budget)")
     longest_stall_s = FloatField("longest time between the starts of two consecutive ticks in a stall (s)")
-    missed_periods = IntField("tick periods skipped by the scheduler")
+    missed_periods = IntField("whole periods missed in stalls (the gaps between two ticks' starts), in total")
     fault_code = IntField("the servo's fault code in the latest ACTUATOR_STATUS (drivers.protocol_values.FaultCode); 0 none")
     n_stories = IntField("stories whose drift and floor acceleration are published (set_story); 0 none")
     table_verdict = IntField("the table against its record: a code of TABLE_VERDICT_NAMES")

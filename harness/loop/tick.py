@@ -21,7 +21,7 @@ from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
 from harness.loop.trip_outputs import TripOutputs
 from harness.realtime.memory import float_view
-from harness.safety.events import bit
+from harness.safety.checks import bit
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import SupervisedCommand, Supervisor
@@ -127,6 +127,11 @@ class ControlTick:
         #: Times the zero, disabled command could not be sent (the drive watchdog is then the backstop).
         self.disable_failures = 0
         self.last_event = ""
+        #: The latest tick's compute time (s, wall clock) and the CPU time of the thread that ran it (s): from
+        #: the start of :meth:`run` until its command is sent and its events are handed on. The row's
+        #: ``compute_s`` column and the loop's timing statistics both take this one measurement.
+        self.compute_s = 0.0
+        self.cpu_s = 0.0
         self.command: SupervisedCommand = supervisor.command
         reader = self.reader
         self._table, self._base, self._status = reader.table, reader.base, reader.status
@@ -190,7 +195,7 @@ class ControlTick:
         so sample ages are judged on what arrived while the loop was away.
         ``poll=False`` when the caller has already polled the bus this tick (lockstep).
         """
-        started = time.perf_counter()
+        started, cpu_started = time.perf_counter(), time.thread_time()
         supervisor = self.supervisor
         friction = raw = math.nan
         try:
@@ -203,8 +208,12 @@ class ControlTick:
         self.write(t, command, now)
         self.ticks += 1
         try:
-            supervisor.events.drain(self._sink)
-            self._fill_row(t, command, friction, raw, lateness_s, time.perf_counter() - started, missed_periods)
+            try:
+                supervisor.events.drain(self._sink)
+            finally:  # the tick's work is done: its command is out and its events are handed on
+                self.compute_s = time.perf_counter() - started
+                self.cpu_s = time.thread_time() - cpu_started
+            self._fill_row(t, command, friction, raw, lateness_s, self.compute_s, missed_periods)
             if self.recorder is not None:
                 self.recorder.record_row(self.row)
             if self.status is not None:

@@ -35,9 +35,10 @@ class TimingStats:
         lateness_s : float
             Wake-up lateness against the deadline (s).
         compute_s : float
-            Wall-clock time of the tick's work (s), including any wait for the interpreter lock.
+            Wall-clock time of the tick's work (s), including any wait for the interpreter lock
+            (:attr:`harness.loop.tick.ControlTick.compute_s`, the row's ``compute_s`` too).
         cpu_s : float
-            CPU time the loop thread itself spent on the tick (s).
+            CPU time the loop thread itself spent on it (s).
         """
         k = self.count
         if k < self._capacity:

@@ -6,7 +6,7 @@ profile's ``safety.trip_actions`` names for the class of the check that tripped
 (:data:`harness.safety.config.TRIP_CLASS_OF`), in the trip tick itself:
 
 1. ``estop``: one ESTOP frame, ``active=1``, ``source`` SUPERVISOR, ``reason`` the
-   check's bit index + 1 (:data:`~harness.safety.events.CHECK_NAMES`; 0 is "unspecified"),
+   check's bit index + 1 (:data:`~harness.safety.checks.CHECK_NAMES`; 0 is "unspecified"),
    repeated every ``estop_every`` ticks (``can.estop_rate_hz``) while TRIPPED;
 2. ``stop_table``: one RIG_CONTROL stop to the table controller, where the run has a table
    link (``stop_table`` given).
@@ -24,8 +24,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from drivers.protocol_values import EstopSource
+from harness.safety.checks import CHECK_NAMES
 from harness.safety.config import TripActionsConfig
-from harness.safety.events import CHECK_NAMES
 from harness.safety.lifecycle import State
 
 #: ESTOP ``source`` of the harness's safety supervisor (the DBC's value table of ESTOP ``source``).

@@ -3,8 +3,8 @@
 Each request is tried only when the profile asks for it, and each result says plainly
 whether it was granted and, if not, why (for example "SCHED_FIFO refused: operation
 not permitted; run as root or grant CAP_SYS_NICE / an rtprio limit"). The garbage
-collector is frozen and disabled for the run (DESIGN.md: its pauses show as 10-20 ms
-spikes) and restored afterwards.
+collector is frozen and disabled for the run (its pauses show as 10-20 ms spikes:
+benchmarks/README.md, "Timing facts the loop is built on") and restored afterwards.
 """
 
 from __future__ import annotations

@@ -2,7 +2,8 @@
 
 ``next += period; sleep_until(next)``: lateness does not accumulate. The wait sleeps
 until ``spin_s`` before the deadline and spins the rest, which on these machines turns
-a median wake-up lateness of ~50 us (plain sleep) into well under 1 us (DESIGN.md).
+a median wake-up lateness of ~50 us (plain sleep) into well under 1 us (benchmarks/README.md,
+"Timing facts the loop is built on").
 When a tick runs so long that whole deadlines pass, those deadlines are skipped
 (counted as overruns) and the loop runs at once on the latest one that passed, late,
 instead of bursting through the missed ticks one after another.

@@ -115,15 +115,6 @@ def _timing(run: RunData) -> Mapping[str, Any]:
     return _mapping(_mapping(run.metadata.get("summary")).get("timing"))
 
 
-def _column_p99_us(column: str) -> Cell:
-    def cell(run: RunData) -> str:
-        if not run.has(column) or not _timing(run):
-            return ABSENT
-        values = run[column][np.isfinite(run[column])]
-        return f"{np.percentile(values, 99) * 1e6:.1f}" if values.size else ABSENT
-    return cell
-
-
 def _micro(key: str) -> Cell:
     def cell(run: RunData) -> str:
         if key.startswith("lateness") and _timing(run).get("lockstep"):
@@ -147,7 +138,6 @@ def timing_table(runs: Sequence[RunData]) -> TextTable | None:
         ("Compute p99 (us)", _micro("compute_p99_s")),
         ("Compute p99.9 (us)", _micro("compute_p999_s")),
         ("Compute max (us)", _micro("compute_max_s")),
-        ("compute_s column p99 (us)", _column_p99_us("compute_s")),
         ("CPU of the loop thread p50 (us)", _micro("cpu_median_s")),
         ("Missed periods", lambda run: _format(_timing(run).get("overruns"))),
         ("Stalls ridden through", lambda run: _format(_timing(run).get("stalls_ridden_through"))),
@@ -155,9 +145,9 @@ def timing_table(runs: Sequence[RunData]) -> TextTable | None:
         ("Stall budget (ms)", lambda run: _format(_timing(run).get("stall_budget_s"), 1e3, 1)),
         ("Pre-flight check", _preflight),
     ]
-    note = ("Compute = wall-clock time of the whole tick, as the console prints it at the end of a run; the "
-            "compute_s column of signals.csv stops before the tick records its row, so its p99 is a little lower. "
-            "In lockstep the loop waits for the rig, so lateness is not measured.")
+    note = ("Compute = wall-clock time of a tick from its start until its command is sent and its events handed "
+            "on, as the console prints it at the end of a run; the compute_s column of signals.csv holds the same "
+            "measurement, tick by tick. In lockstep the loop waits for the rig, so lateness is not measured.")
     return _table("Loop timing", timed, rows, note)
 
 

@@ -1,8 +1,8 @@
 """The loop-timing plot: histograms of tick lateness and compute time of real-time runs (run, dry run).
 
 In lockstep the loop waits for the rig, so there is no lateness to show: the panel says so
-instead of drawing an empty histogram. Each legend gives the percentiles of its column and,
-for compute, the whole tick's p99 the console printed (``metadata.json`` ``summary.timing``).
+instead of drawing an empty histogram. Each legend gives the percentiles of its column (the
+compute column is the measurement the console's summary is made of).
 """
 
 from __future__ import annotations
@@ -40,9 +40,6 @@ def _histogram(ax: Axes, run: RunData, column: str, colour: str) -> bool:
     if column == "lateness_s":
         overruns = int(np.nansum(run["overrun"] > 0)) if run.has("overrun") else 0
         label += f", {overruns} overruns"
-    whole_tick = _timing(run).get("compute_p99_s")
-    if column == "compute_s" and isinstance(whole_tick, (int, float)):
-        label += f" (whole tick p99 {whole_tick * 1e6:.0f} µs, as on the console)"
     ax.hist(values, bins=60, color=colour, alpha=0.6, label=label)
     return True
 

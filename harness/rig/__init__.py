@@ -1,11 +1,13 @@
 """The virtual rig: the 4-DOF plant served on the CAN bus (``harness rig``, dry runs, tests).
 
-Modules: :mod:`.config` (profile section ``rig``), :mod:`.table` (table and plant),
-:mod:`.sensors`, :mod:`.actuator`, :mod:`.drive` (enable logic, watchdog),
-:mod:`.faults` (fault ids), :mod:`.publish` (frames with faults), :mod:`.inbox`
-(frames in, one at a time), :mod:`.schedule` (message rates), :mod:`.history`,
-:mod:`.virtual_rig` (:class:`VirtualRig`), :mod:`.runner` (service thread),
-:mod:`.command` (``harness rig``).
+Modules: :mod:`.config` (profile section ``rig``), :mod:`.truth` (the rig's own building and
+bearing), :mod:`.parts` (what a rig is built from), :mod:`.table` (table and plant),
+:mod:`.sensors`, :mod:`.actuator`, :mod:`.drive` (enable logic, watchdog), :mod:`.faults`
+(fault ids), :mod:`.publish` (frames with faults), :mod:`.schedule` (message rates),
+:mod:`.grid` (rounding to sub-steps and steps), :mod:`.history`, :mod:`.journal` (state changes
+for a terminal), :mod:`.virtual_rig` (:class:`VirtualRig`), :mod:`.runner` (service thread).
+Frames come in one at a time through :class:`drivers.rig_reader.RigReader`; ``harness rig``
+is :mod:`harness.runs.rig_service`.
 
 The lockstep contract (the harness's lockstep loop is written to it):
 

@@ -26,12 +26,13 @@ from typing import TYPE_CHECKING
 import can
 import numpy as np
 
+from drivers import rig_reader
 from drivers.codec import load_protocol
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
+from drivers.rig_reader import RigReader
 from drivers.writer import RigWriter
 from harness.canbus.config import CanConfig
 from harness.errors import ModelError
-from harness.rig import inbox
 from harness.rig.actuator import make_actuator
 from harness.rig.drive import Drive, ResetVerdict
 from harness.rig.faults import (
@@ -43,7 +44,6 @@ from harness.rig.faults import (
     schedule_from,
 )
 from harness.rig.history import History, record_columns
-from harness.rig.inbox import RigInbox
 from harness.rig.journal import RigJournal
 from harness.rig.parts import RigParts, RigState
 from harness.rig.publish import RigPublisher
@@ -67,8 +67,8 @@ class VirtualRig:
         The processed record the table plays.
     bus_or_link : can.BusABC or RigLink
         An open bus (the rig builds its writer), or a link from
-        :func:`drivers.link.open_rig` (its writer is used; frames are received by
-        the rig's own :class:`~harness.rig.inbox.RigInbox` on ``link.bus``).
+        :func:`drivers.link.open_rig` (its writer is used). Either way the rig receives
+        through its own :class:`~drivers.rig_reader.RigReader` on the bus, timed by ``clock``.
     step_period_s : float
         The harness's control period (s); a whole multiple of the physics sub-step.
     lockstep : bool, optional
@@ -117,7 +117,7 @@ class VirtualRig:
         self.drive = Drive(cfg.drive.watchdog_timeout_s)
         self.faults = FaultSet(schedule_from(cfg.faults))
         self.publisher = RigPublisher(writer, self.faults, self.sensors)
-        self.inbox = RigInbox(self.bus, protocol, clock)
+        self.reader = RigReader(self.bus, protocol, clock)
         self.history = History(int(math.ceil(cfg.history_s / self.h)), self.table.y.size)
         can_settings = can_config or CanConfig()
         self.schedule = PublishSchedule(can_settings, self.h, self.step_period_s)
@@ -177,7 +177,7 @@ class VirtualRig:
         return RigState(
             self.drive.state, self.drive.fault_code, self.pressure_ok, self.actuator.force_N, self.drive.command_N,
             self.rig_time_s, self.table.record_time_s, self.step_index, self.table.running, self.lockstep,
-            self.faults.active_ids(), self.inbox.frames,
+            self.faults.active_ids(), self.reader.frames,
         )
 
     @property
@@ -214,7 +214,7 @@ class VirtualRig:
         """A DRIVE_RESET frame: the drive judges it; the verdict is journalled and, in lockstep, announced at once."""
         self._update_faults()
         self._update_drive(now)
-        acknowledged = int(self.inbox.drive_reset[0])
+        acknowledged = int(self.reader.drive_reset[0])
         verdict = self.drive.request_reset(
             acknowledged, now, pressure_ok=self.pressure_ok, injected_code=self._injected_drive_code(),
             estop_asserted=self._estop_asserted(now),
@@ -317,7 +317,7 @@ class VirtualRig:
 
     # ---------------------------------------------------------------- frames
     def _on_control(self, now: float) -> None:
-        command, lockstep, fault_id, fault_param = self.inbox.control
+        command, lockstep, fault_id, fault_param = self.reader.control
         self.faults.inject(int(fault_id), float(fault_param))
         if bool(lockstep) != self.lockstep and not (self.pinned_lockstep and not lockstep):
             self.lockstep = bool(lockstep)
@@ -342,24 +342,24 @@ class VirtualRig:
             self._publish_lockstep(now)
 
     def _handle(self, kind: int, now: float) -> None:
-        if kind == inbox.COMMAND:
+        if kind == rig_reader.COMMAND:
             # Record the command before the watchdog judges: a frame that arrived is proof
             # the harness is alive, even when this rig was the one that stalled.
-            enable, force = self.inbox.command
+            enable, force = self.reader.command
             self.drive.on_command(bool(enable), force, now)
             self._update_drive(now)
             if self.lockstep:
                 self._step(now)
-        elif kind == inbox.HEARTBEAT:
+        elif kind == rig_reader.HEARTBEAT:
             self._heard_harness = True
-            self.drive.on_heartbeat(now, int(self.inbox.heartbeat[0]))
+            self.drive.on_heartbeat(now, int(self.reader.heartbeat[0]))
             self._update_drive(now)
-        elif kind == inbox.CONTROL:
+        elif kind == rig_reader.CONTROL:
             self._on_control(now)
-        elif kind == inbox.ESTOP:
+        elif kind == rig_reader.ESTOP:
             self._last_estop_frame_time = now
             self.drive.on_estop()
-        elif kind == inbox.DRIVE_RESET:
+        elif kind == rig_reader.DRIVE_RESET:
             self._on_drive_reset(now)
 
     def _after_frames(self, now: float) -> None:
@@ -402,12 +402,12 @@ class VirtualRig:
                 self._update_drive(now)
                 self._advance_to(now)
             handled = 0
-            kind = self.inbox.receive(wait_s)
-            while kind != inbox.NOTHING:
+            kind = self.reader.receive(wait_s)
+            while kind != rig_reader.NOTHING:
                 handled += 1
                 self._handle(kind, now if wait_s == 0.0 else self.clock())
                 self._watch()
-                kind = self.inbox.receive(0.0)
+                kind = self.reader.receive(0.0)
             if wait_s:
                 now = self.clock()
             self._after_frames(now)

@@ -24,7 +24,8 @@ from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.errors import ProfileError
 from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
-from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult, LoopStatus
+from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult
+from harness.loop.status import LoopStatus
 from harness.loop.table_link import CanTableLink
 from harness.loop.tick import ControlTick
 from harness.model.warmup import warm_up
@@ -275,7 +276,7 @@ def run_session(
         title += " (lockstep)" if lockstep else ""
         alerts = (summary(profile.safety_weakened),) if profile.safety_weakened else ()
         with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,
-                         profile.safety.force.max_force_N, title, loop.timing, console, settings.show_console, alerts,
+                         profile.safety.force.max_force_N, title, console, settings.show_console, alerts,
                          settings.notes):
             try:
                 result = loop.run()

@@ -10,11 +10,7 @@ from harness.safety.health import TickHealth
 
 
 class DriveFault(FlagDetector):
-    """The actuator's servo controller reports a fault.
-
-    Detects: ``health.drive_fault``. Bound: the same tick. Action: TRIP.
-    Reset: explicit reset, refused while the fault is reported.
-    """
+    """The actuator's servo controller reports a fault (``health.drive_fault``)."""
 
     NAME = "drive_fault"
     ACTION = Action.TRIP
@@ -30,11 +26,7 @@ class DriveFault(FlagDetector):
 
 
 class HydraulicPressure(FlagDetector):
-    """Hydraulic pressure lost.
-
-    Detects: ``health.pressure_ok`` False. Bound: the same tick. Action: TRIP.
-    Reset: explicit reset, refused while the pressure is not ok.
-    """
+    """Hydraulic pressure lost (``health.pressure_ok`` False)."""
 
     NAME = "hydraulic_pressure"
     ACTION = Action.TRIP
@@ -50,12 +42,7 @@ class HydraulicPressure(FlagDetector):
 
 
 class ActuatorStatusStale(Detector):
-    """Actuator status frames stopped arriving.
-
-    Detects: ``actuator_status_age_s > max_status_age_s`` (or not finite).
-    Bound: the first tick the age exceeds the limit. Action: TRIP.
-    Reset: explicit reset, refused while still stale.
-    """
+    """Actuator status frames stopped arriving (``health.actuator_status_age_s``)."""
 
     NAME = "actuator_status_stale"
     ACTION = Action.TRIP
@@ -88,17 +75,13 @@ class ActuatorStatusStale(Detector):
 class ForceTracking(Detector):
     """The actuator does not follow the commanded force.
 
-    Detects: ``|measured_force_N - expected| > tracking_tolerance_N`` for at least
-    ``tracking_time_s``, where ``expected`` is the force commanded on the previous
-    tick, less the actuator's natural velocity feedback ``velocity_feedback_Ns_per_m``
-    times the measured sliding velocity, passed through a first-order lag with
-    ``actuator_time_constant_s`` (none when 0). That is the low-frequency model of a
-    servo-hydraulic actuator under a proportional force loop (docs/SAFETY.md, "Force
-    tracking of a servo-hydraulic actuator"); with no velocity feedback, a force source.
-    The supervisor writes that command to :attr:`command_N` before each
-    update. Bound: ``tracking_time_s`` after the error first exceeds the
-    tolerance. Action: ``tracking_action`` (default TRIP). Reset: explicit reset
-    (filter and timer cleared; not knowable from one sample).
+    The expected force is the force commanded on the previous tick (the supervisor writes it
+    to :attr:`command_N` before each update), less the actuator's natural velocity feedback
+    ``velocity_feedback_Ns_per_m`` times the measured sliding velocity, through a first-order
+    lag with ``actuator_time_constant_s`` (none when 0): the low-frequency model of a
+    servo-hydraulic actuator under a proportional force loop (docs/SAFETY.md, "Force tracking
+    of a servo-hydraulic actuator"); with no velocity feedback, a force source. The action is
+    ``tracking_action``; a reset is never refused (the error is not knowable from one sample).
     """
 
     NAME = "force_tracking"

@@ -63,12 +63,7 @@ class RateDetector(Detector):
 
 
 class E2eRejects(RateDetector):
-    """Too many frames rejected by the E2E counter/CRC check.
-
-    Detects: more than ``max_e2e_rejects`` increments of ``health.e2e_rejects``
-    within ``e2e_window_s``. Bound: the tick the counter passes the limit.
-    Action: TRIP. Reset: explicit reset (window cleared).
-    """
+    """Too many frames rejected by the E2E counter/CRC check (``health.e2e_rejects``)."""
 
     NAME = "e2e_rejects"
     ACTION = Action.TRIP
@@ -85,13 +80,8 @@ class E2eRejects(RateDetector):
 
 
 class BusErrorFrames(RateDetector):
-    """Too many CAN error frames.
-
-    Detects: more than ``max_error_frames`` error frames within
-    ``error_frame_window_s``. Bound: the tick the count passes the limit.
-    Action: ``error_frame_action`` (default SAFE_STOP: the link still works, so
-    the run is ended gently). Reset: explicit reset (window cleared).
-    """
+    """Too many CAN error frames; the action is ``error_frame_action`` (the link still works, so by
+    default the run is ended gently)."""
 
     NAME = "bus_error_frames"
     ACTION = Action.SAFE_STOP
@@ -108,12 +98,7 @@ class BusErrorFrames(RateDetector):
 
 
 class BusSendFailures(RateDetector):
-    """Commands that could not be sent (ENOBUFS: the tx queue is full).
-
-    Detects: more than ``max_send_failures`` failed sends within
-    ``send_failure_window_s``. Bound: the tick the count passes the limit.
-    Action: TRIP. Reset: explicit reset (window cleared).
-    """
+    """Commands that could not be sent (ENOBUFS: the tx queue is full)."""
 
     NAME = "bus_send_failures"
     ACTION = Action.TRIP
@@ -130,12 +115,8 @@ class BusSendFailures(RateDetector):
 
 
 class BusErrorPassive(FlagDetector):
-    """The CAN controller went error-passive.
-
-    Detects: ``health.error_passive``. Bound: the same tick. Action:
-    ``error_passive_action`` (default SAFE_STOP: frames still get through).
-    Reset: explicit reset, refused while still error-passive.
-    """
+    """The CAN controller went error-passive; the action is ``error_passive_action`` (frames still get
+    through, so by default the run is ended gently)."""
 
     NAME = "bus_error_passive"
     ACTION = Action.SAFE_STOP
@@ -154,13 +135,11 @@ class BusErrorPassive(FlagDetector):
 
 
 class BusOff(FlagDetector):
-    """The CAN controller is bus-off.
+    """The CAN controller is bus-off (``health.bus_off``).
 
-    Detects: ``health.bus_off``, from bus-off error frames (SocketCAN's error-class
-    bits; other backends deliver no error frames, so there bus-off shows only as send
-    failures, which trip ``bus_send_failures``, and as silence, which trips
-    ``sensor_stale``). Bound: the same tick.
-    Action: TRIP. Reset: explicit reset, refused while bus-off.
+    Seen from bus-off error frames (SocketCAN's error-class bits). Other backends deliver no
+    error frames: there bus-off shows only as send failures, which trip ``bus_send_failures``,
+    and as silence, which trips ``sensor_stale``.
     """
 
     NAME = "bus_off"
@@ -177,11 +156,7 @@ class BusOff(FlagDetector):
 
 
 class BusGone(FlagDetector):
-    """The CAN interface disappeared or cannot be read.
-
-    Detects: ``health.bus_gone``. Bound: the same tick. Action: TRIP.
-    Reset: explicit reset, refused while the bus is gone.
-    """
+    """The CAN interface disappeared or cannot be read (``health.bus_gone``)."""
 
     NAME = "bus_gone"
     ACTION = Action.TRIP
@@ -197,11 +172,7 @@ class BusGone(FlagDetector):
 
 
 class ForeignCommand(FlagDetector):
-    """Another node sends on the actuator command ID.
-
-    Detects: ``health.foreign_command``. Bound: the same tick. Action: TRIP
-    (two masters on one actuator). Reset: explicit reset, refused while seen.
-    """
+    """Another node sends on the actuator command ID (``health.foreign_command``): two masters on one actuator."""
 
     NAME = "foreign_command"
     ACTION = Action.TRIP

@@ -2,7 +2,7 @@
 
 Every limit is a frozen dataclass field declared with :func:`harness.config.schema.quantity`,
 so it carries its unit (named in the key) and its range. Defaults fit the NCEER
-quarter-scale rig (shared/SPEC.md 6b): total weight about 39.5 kN, peak control
+quarter-scale rig (SPEC 6b): total weight about 39.5 kN, peak control
 force 12-14 % of it (about 5 kN), so a 10 kN force limit leaves a factor of two;
 a bearing stroke of a few centimetres (soft 0.05 m, hard 0.075 m).
 

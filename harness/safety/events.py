@@ -1,9 +1,7 @@
-"""Safety vocabulary shared by every check: actions, stable names, bit flags, the event ring.
+"""Safety vocabulary shared by every check: what a check does when it acts, and the event ring.
 
-Every interlock and detector has a stable machine name (``"stroke_hard"``,
-``"sensor_stale"``, ...). The name is the trip reason, the key of its act counter,
-and the index of its bit in :attr:`SupervisedCommand.acted`: ``bit(name) == 1 << CHECK_NAMES.index(name)``.
-New checks are appended, never inserted, so recorded flags keep their meaning.
+The checks' stable names and bit flags are those of the one list of checks,
+:mod:`harness.safety.checks`.
 """
 
 from __future__ import annotations
@@ -28,70 +26,6 @@ class Action(IntEnum):
 
 
 ACTION_BY_NAME: dict[str, Action] = {"indicate": Action.INDICATE, "safe_stop": Action.SAFE_STOP, "trip": Action.TRIP}
-
-#: Stable names of all checks, in bit order. Append only.
-CHECK_NAMES: tuple[str, ...] = (
-    "force_clamp",
-    "force_rate",
-    "stroke_soft",
-    "stroke_hard",
-    "stroke_predictive",
-    "sensor_invalid",
-    "sensor_stale",
-    "sensor_jump",
-    "sensor_stuck",
-    "sensor_disagree",
-    "e2e_rejects",
-    "bus_error_frames",
-    "bus_error_passive",
-    "bus_off",
-    "bus_send_failures",
-    "bus_gone",
-    "foreign_command",
-    "drive_fault",
-    "hydraulic_pressure",
-    "actuator_status_stale",
-    "force_tracking",
-    "loop_stall",  # bit 21; was "loop_overruns" (consecutive late ticks) before the stall budget
-    "loop_timing",
-    "tick_exception",
-    "controller_output",
-    "estop",
-    "operator_stop",
-    "operator_trip",
-    "stop_ramp",
-    "sensor_sign_flip",  # bit 29; appended: runs after sensor_stuck, before sensor_disagree (supervisor order)
-    "estop_lost",  # bit 30; appended: the E-stop panel's heartbeat is older than safety.estop.max_panel_age_s
-    "table_record_mismatch",  # bit 31; appended: the table does not play the record the harness was told
-    "table_record_marginal",  # bit 32; appended: it follows it, but not as a healthy table does (a warning)
-)
-
-_INDEX: dict[str, int] = {name: index for index, name in enumerate(CHECK_NAMES)}
-
-
-def bit(name: str) -> int:
-    """The bit flag of the check called ``name``.
-
-    Raises
-    ------
-    KeyError
-        If ``name`` is not one of :data:`CHECK_NAMES`.
-    """
-    try:
-        return 1 << _INDEX[name]
-    except KeyError as err:
-        raise KeyError(f"unknown safety check {name!r}; expected one of {', '.join(CHECK_NAMES)}") from err
-
-
-def index(name: str) -> int:
-    """The position of ``name`` in :data:`CHECK_NAMES` (its counter slot)."""
-    return bit(name).bit_length() - 1
-
-
-def names_of(flags: int) -> tuple[str, ...]:
-    """Decode bit flags into check names (for reports; allocates, never call per tick)."""
-    return tuple(name for i, name in enumerate(CHECK_NAMES) if flags >> i & 1)
-
 
 class EventKind:
     """Kinds of event entries (plain strings, interned once)."""

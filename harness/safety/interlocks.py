@@ -18,11 +18,8 @@ _ZERO_FACTOR = 1e-9
 class StrokeSoftFade:
     """Fade the outward force beyond the soft stroke limit.
 
-    Detects: ``|x_b|`` beyond ``soft_limit_m`` with a force of the same sign as
-    ``x_b`` (pushing further out). Action: FADE: the outward force is scaled by
-    ``1 - (|x_b| - soft_limit_m) / fade_band_m``, down to zero at and after
-    ``soft_limit_m + fade_band_m``; a force towards the centre passes untouched.
-    Bound: the same tick. Reset: none needed; it acts only while the condition holds.
+    The outward force (same sign as ``x_b``) is scaled by ``1 - (|x_b| - soft_limit_m) / fade_band_m``,
+    down to zero at and after ``soft_limit_m + fade_band_m``; a force towards the centre passes untouched.
     """
 
     NAME = "stroke_soft"
@@ -66,11 +63,7 @@ class StrokeSoftFade:
 
 
 class StrokeHardLimit:
-    """Trip at the hard stroke limit.
-
-    Detects: ``|x_b| >= hard_limit_m``. Action: TRIP. Bound: the tick of the
-    sample. Reset: explicit reset, refused while ``|x_b| >= hard_limit_m``.
-    """
+    """Trip at the hard stroke limit ``hard_limit_m``."""
 
     NAME = "stroke_hard"
     ACTION = Action.TRIP
@@ -95,12 +88,7 @@ class StrokeHardLimit:
 
 
 class StrokePredictiveLimit:
-    """Trip when the stroke, projected over the stopping time, would pass the hard limit.
-
-    Detects: ``|x_b + xdot_b * stop_time_s| >= hard_limit_m``. Action: TRIP.
-    Bound: the tick of the sample. Reset: explicit reset (the condition is
-    re-evaluated: refused while the projection is still beyond the limit).
-    """
+    """Trip when the stroke, projected over the stopping time ``stop_time_s``, would pass the hard limit."""
 
     NAME = "stroke_predictive"
     ACTION = Action.TRIP
@@ -133,11 +121,7 @@ class StrokePredictiveLimit:
 
 
 class ForceClamp:
-    """Clamp the force magnitude.
-
-    Detects: ``|force| > max_force_N``. Action: CLAMP to ``+/-max_force_N``.
-    Bound: the same tick. Reset: none needed.
-    """
+    """Clamp the force magnitude to ``max_force_N``."""
 
     NAME = "force_clamp"
     ACTION = Action.CLAMP
@@ -168,12 +152,8 @@ class ForceClamp:
 
 
 class ForceRateLimit:
-    """Clamp the change of force per tick.
-
-    Detects: ``|force - previous| > max_force_rate_N_per_s * dt``. Action: CLAMP
-    the step to that size. Bound: the same tick. Reset: none needed; the previous
-    force is the last force the supervisor commanded (0 whenever the drive is off).
-    """
+    """Clamp the change of force per tick to ``max_force_rate_N_per_s * dt``, from the last force the
+    supervisor commanded (0 whenever the drive is off)."""
 
     NAME = "force_rate"
     ACTION = Action.CLAMP

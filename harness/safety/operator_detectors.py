@@ -16,16 +16,14 @@ HOST_TIMING_REMEDIES = (
 
 
 class LoopStall(Detector):
-    """The loop went longer than the stall budget without writing a command.
+    """The loop went longer than the stall budget without writing a command (``health.stall_s``).
 
-    Detects: ``health.stall_s > max_stall_s``, where ``stall_s`` is the time since
-    the previous tick's command (the loop measures it on waking; missed time, not a
-    count of late ticks: one 45 ms stall at 500 Hz is 22 missed periods).
-    Bound: the first tick after the stall (a stalled loop cannot act; during the
-    stall the drive-side watchdog is the backstop). Action: TRIP.
-    Shorter stalls are ridden through by the loop: counted, recorded as an event
-    and shown on the console.
-    Reset: explicit reset (the stall is over once the loop runs again).
+    ``stall_s`` is the time since the previous tick's command, measured by the loop on waking:
+    missed time, not a count of late ticks (one 45 ms stall at 500 Hz is 22 missed periods). A
+    stalled loop cannot act, so it trips on the first tick after the stall; during the stall
+    the drive-side watchdog is the backstop. Shorter stalls are ridden through by the loop:
+    counted, recorded as an event and shown on the console. A reset is never refused (the
+    stall is over once the loop runs again).
     """
 
     NAME = "loop_stall"
@@ -58,12 +56,8 @@ class LoopStall(Detector):
 
 
 class EStop(FlagDetector):
-    """The operator's E-stop frame is asserted.
-
-    Detects: ``health.estop``. Bound: the same tick. Action: TRIP (also from
-    IDLE and DONE: the latch then blocks arming). Reset: explicit reset, refused
-    while the E-stop is still asserted.
-    """
+    """The operator's E-stop frame is asserted (``health.estop``); watched in IDLE and DONE too, where the
+    latch then blocks arming."""
 
     NAME = "estop"
     ACTION = Action.TRIP
@@ -81,11 +75,8 @@ class EStop(FlagDetector):
 class EStopLost(Detector):
     """The E-stop panel's heartbeat stopped: an unplugged or dead panel could not stop the run.
 
-    Detects: the newest intact ESTOP frame from the panel (source 3) older than
-    ``max_panel_age_s``, or its age not finite or negative (no frame yet, a clock fault).
-    Bound: the first tick with the age above the bound. Action: TRIP. Not evaluated when
-    ``panel_required`` is false (a weakening the run records). Reset: explicit reset,
-    refused while the panel is still silent.
+    An age that is not finite means no frame yet or a clock fault. Not evaluated when
+    ``panel_required`` is false (a weakening the run records).
     """
 
     NAME = "estop_lost"
@@ -118,12 +109,7 @@ class EStopLost(Detector):
 
 
 class OperatorStop(FlagDetector):
-    """The operator asked for a controlled stop (first Ctrl-C).
-
-    Detects: ``health.operator_stop``. Bound: the same tick. Action: SAFE_STOP
-    (ARMED/RUNNING -> STOPPING; ignored in other states). Reset: none within the
-    command (the request lasts until it ends); arming is refused while it is set.
-    """
+    """The operator asked for a controlled stop (``health.operator_stop``); ignored outside ARMED and RUNNING."""
 
     NAME = "operator_stop"
     ACTION = Action.SAFE_STOP
@@ -139,12 +125,8 @@ class OperatorStop(FlagDetector):
 
 
 class OperatorTrip(FlagDetector):
-    """The operator asked for an immediate trip (second Ctrl-C or SIGTERM).
-
-    Detects: ``health.operator_trip``. Bound: the same tick. Action: TRIP (from
-    any state). Reset: explicit reset, refused while the request is still set
-    (the loop clears it once handled).
-    """
+    """The operator asked for an immediate trip (``health.operator_trip``); from any state. The loop clears
+    the request once handled."""
 
     NAME = "operator_trip"
     ACTION = Action.TRIP

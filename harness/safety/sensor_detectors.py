@@ -32,13 +32,8 @@ def _fresh(health: TickHealth, channel: int) -> bool:
 
 
 class SensorInvalid(Detector):
-    """NaN, infinite or out-of-range measurement.
-
-    Detects: any of ``x_0, y_b`` not finite or with ``|value| > displacement_range_m``,
-    or ``xdot_0, ydot_b`` not finite or beyond ``velocity_range_m_s``.
-    Bound: the tick the value arrives. Action: TRIP.
-    Reset: explicit reset, refused while a value is still invalid.
-    """
+    """A measurement beyond its range: ``displacement_range_m`` for ``x_0, y_b``, ``velocity_range_m_s`` for
+    ``xdot_0, ydot_b``."""
 
     NAME = "sensor_invalid"
     ACTION = Action.TRIP
@@ -79,12 +74,7 @@ class SensorInvalid(Detector):
 
 
 class SensorStale(Detector):
-    """Sensor data too old.
-
-    Detects: ``table_age_s`` or ``base_age_s`` above ``max_sensor_age_s`` (or not finite).
-    Bound: the first tick the age exceeds the limit. Action: TRIP.
-    Reset: explicit reset, refused while the data are still stale.
-    """
+    """Sensor data too old (``health.table_age_s``, ``health.base_age_s``)."""
 
     NAME = "sensor_stale"
     ACTION = Action.TRIP
@@ -116,13 +106,8 @@ class SensorStale(Detector):
 
 
 class SensorJump(Detector):
-    """Implausible jump between consecutive fresh samples.
-
-    Detects: ``|value - previous fresh value| > jump_limit_m`` (displacements) or
-    ``> jump_limit_m_s`` (velocities). Bound: the first sample after the jump.
-    Action: TRIP. Reset: explicit reset (not knowable from one sample; the
-    history is cleared on reset and arm).
-    """
+    """Implausible jump between consecutive fresh samples (``jump_limit_m`` for displacements,
+    ``jump_limit_m_s`` for velocities); a reset is never refused (not knowable from one sample)."""
 
     NAME = "sensor_jump"
     ACTION = Action.TRIP
@@ -174,16 +159,12 @@ class SensorJump(Detector):
 class SensorStuck(Detector):
     """A measurement frozen to the bit, whether the table moves or not.
 
-    Detects: a channel whose fresh samples are bit-identical to the one before for
-    ``stuck_samples`` samples in a row, at rest too. A healthy transducer is never
-    bit-for-bit constant: its noise through the conditioning moves the last bits on
-    every sample (with noise std at least 0.8 of the quantization step, 50 repeats
-    happen by chance with probability below 1e-9 per hour-long run; docs/SAFETY.md,
-    "Stuck sensors"). A frame that is fresh (good counter and CRC) but frozen is a
-    stuck conditioner or a sender that re-sends its last values. A noise-free
-    (simulated) sensor is indistinguishable from a stuck one, and trips.
-    Bound: ``stuck_samples`` fresh samples after the value froze. Action: TRIP.
-    Reset: explicit reset (counts cleared).
+    A healthy transducer is never bit-for-bit constant: its noise through the conditioning
+    moves the last bits on every sample (with noise std at least 0.8 of the quantization step,
+    50 repeats happen by chance with probability below 1e-9 per hour-long run; docs/SAFETY.md,
+    "Stuck sensors"). A frame that is fresh (good counter and CRC) but frozen is a stuck
+    conditioner or a sender that re-sends its last values. A noise-free (simulated) sensor is
+    indistinguishable from a stuck one, and trips.
     """
 
     NAME = "sensor_stuck"
@@ -297,16 +278,9 @@ class _PairRates(Detector):
 
 
 class SensorDisagree(_PairRates):
-    """Displacement and velocity sensors that disagree.
-
-    Detects: for the table (``x_0``, ``xdot_0``) and the base mat (``y_b``,
-    ``ydot_b``), the finite-difference derivative of the displacement and the
-    measured velocity, both through the same first-order low-pass
-    (``disagree_filter_s``), differing by more than ``disagree_tolerance_m_s``.
-    Bound: ``disagree_time_s`` after the filtered difference first exceeds the
-    tolerance (the filter adds its own lag to the onset). Action: TRIP.
-    Reset: explicit reset (filters and timers cleared).
-    """
+    """Displacement and velocity sensors that disagree, on the table (``x_0``, ``xdot_0``) or the base mat
+    (``y_b``, ``ydot_b``); both signals go through the low-pass ``disagree_filter_s``, which adds its own
+    lag to the onset."""
 
     NAME = "sensor_disagree"
     ACTION = Action.TRIP
@@ -339,16 +313,10 @@ class SensorDisagree(_PairRates):
 class SensorSignFlip(_PairRates):
     """A displacement/velocity pair whose signs disagree: a polarity or wiring fault.
 
-    Detects: for the table (``x_0``, ``xdot_0``) and the base mat (``y_b``,
-    ``ydot_b``), the finite-difference derivative of the displacement and the
-    measured velocity, both through the same first-order low-pass as
-    ``sensor_disagree`` (``disagree_filter_s``), of opposite signs with both above
-    ``sign_flip_floor_m_s`` for ``sign_flip_time_s``. One signal of the pair is
-    negated (a swapped wire, a sensor mounted the other way, a wrong sign in the
-    conditioning): the controller would push the wrong way.
-    Bound: ``sign_flip_time_s`` after both filtered signals exceed the floor with
-    opposite signs (the filter adds its own lag to the onset). Action: TRIP.
-    Reset: explicit reset (filters and timers cleared).
+    One signal of the pair (table or base mat) is negated: a swapped wire, a sensor mounted the
+    other way, a wrong sign in the conditioning; the controller would push the wrong way. Both
+    signals go through the low-pass of ``sensor_disagree`` (``disagree_filter_s``), which adds
+    its own lag to the onset.
 
     Why both this and ``sensor_disagree``: ``sensor_disagree`` bounds the magnitude of
     the difference, which catches scale errors, offsets and drifts of the same sign

@@ -5,27 +5,13 @@ and the actuator write, with the loop's time ``t`` and step ``dt`` (s), the
 preallocated :class:`~harness.safety.health.TickHealth` and the controller's raw
 force. It returns the same preallocated :class:`SupervisedCommand` every tick.
 
-Order of evaluation in ARMED, RUNNING and STOPPING (fixed; the first TRIP wins
-and is latched as the reason, later checks are not evaluated on that tick):
-
-1. ``loop_timing``: ``t`` finite and ``dt`` finite and > 0.
-2. Operator: ``estop``, ``estop_lost`` (the panel's heartbeat), ``operator_trip``, ``operator_stop``.
-3. Sensors: ``sensor_invalid``, ``sensor_stale``, ``sensor_jump``, ``sensor_stuck``, ``sensor_sign_flip``,
-   ``sensor_disagree`` (a sign flip usually trips the disagreement check too, but later; on a
-   tick where both hold, the more specific ``sensor_sign_flip`` is the reason).
-4. CAN: ``bus_gone``, ``bus_off``, ``bus_error_passive``, ``bus_error_frames``, ``e2e_rejects``,
-   ``bus_send_failures``, ``foreign_command``.
-5. Actuator: ``drive_fault``, ``hydraulic_pressure``, ``actuator_status_stale``, ``force_tracking``.
-6. ``loop_stall``.
-6b. The table against its record: ``table_record_mismatch`` (adds the tick's table velocity to the
-    comparison and judges it when due; a safe stop), then ``table_record_marginal`` (a warning).
-7. ``controller_output``: the raw force must be finite.
-8. Stroke trips: ``stroke_hard``, then ``stroke_predictive``.
-9. Force shaping: ``force_clamp`` -> ``stop_ramp`` (STOPPING; zero target in ARMED) ->
-   ``force_rate`` -> ``stroke_soft``.
-10. Lifecycle: STOPPING becomes DONE on the first tick at or after the ramp time
-    whose shaped force is exactly zero (at once if the stop came from ARMED,
-    where no force was applied).
+The checks run in the fixed order of :data:`harness.safety.checks.CHECKS` (in ARMED, RUNNING
+and STOPPING; the first TRIP wins and is latched as the reason, later checks are not evaluated
+on that tick): the loop's time, then every detector (operator, sensors, CAN, actuator, stalls,
+the table against its record), then the controller's output and the stroke trips, then the
+force shaping (clamp, stopping ramp, rate limit, stroke fade). STOPPING becomes DONE on the
+first tick at or after the ramp time whose shaped force is exactly zero (at once if the stop
+came from ARMED, where no force was applied).
 
 The stroke fade comes after the rate limit: a fade may cut an outward force
 towards zero faster than the rate limit (as a trip does), but the force never
@@ -38,26 +24,14 @@ in every state but ARMED, RUNNING and STOPPING the command is force 0, enable Fa
 from __future__ import annotations
 
 import math
+from typing import TypeVar
 
 from harness.errors import ProfileError
-from harness.safety.actuator_detectors import (
-    ActuatorStatusStale,
-    DriveFault,
-    ForceTracking,
-    HydraulicPressure,
-)
-from harness.safety.comms_detectors import (
-    BusErrorFrames,
-    BusErrorPassive,
-    BusGone,
-    BusOff,
-    BusSendFailures,
-    E2eRejects,
-    ForeignCommand,
-)
+from harness.safety.actuator_detectors import ForceTracking
+from harness.safety.checks import CHECK_NAMES, bit, build_detectors, index
 from harness.safety.config import SafetyConfig, check_config
 from harness.safety.detector_base import TIME_EPS_S, Detector
-from harness.safety.events import CHECK_NAMES, Action, EventKind, EventRing, bit, index
+from harness.safety.events import Action, EventKind, EventRing
 from harness.safety.health import TickHealth
 from harness.safety.interlocks import (
     ForceClamp,
@@ -67,28 +41,19 @@ from harness.safety.interlocks import (
     StrokeSoftFade,
 )
 from harness.safety.lifecycle import DRIVE_STATES, Lifecycle, State
-from harness.safety.operator_detectors import (
-    EStop,
-    EStopLost,
-    LoopStall,
-    OperatorStop,
-    OperatorTrip,
-)
+from harness.safety.operator_detectors import EStop, OperatorStop, OperatorTrip
 from harness.safety.prearm import pre_arm_failures
-from harness.safety.sensor_detectors import (
-    SensorDisagree,
-    SensorInvalid,
-    SensorJump,
-    SensorSignFlip,
-    SensorStale,
-    SensorStuck,
-)
-from harness.safety.table_record import TableRecordCheck, TableRecordMarginal, TableRecordMismatch
+from harness.safety.supervisor_checks import ControllerOutput, LoopTiming, StopRamp, TickException
+from harness.safety.table_record import TableRecordCheck
+
+_D = TypeVar("_D", bound=Detector)
 
 _SLOT = {name: k for k, name in enumerate(CHECK_NAMES)}
-_B_CLAMP, _B_RATE, _B_SOFT = bit("force_clamp"), bit("force_rate"), bit("stroke_soft")
-_B_RAMP = bit("stop_ramp")
-_I_CLAMP, _I_RATE, _I_SOFT, _I_RAMP = index("force_clamp"), index("force_rate"), index("stroke_soft"), index("stop_ramp")
+_B_CLAMP, _B_RATE, _B_SOFT = bit(ForceClamp.NAME), bit(ForceRateLimit.NAME), bit(StrokeSoftFade.NAME)
+_B_RAMP = bit(StopRamp.NAME)
+_I_CLAMP, _I_RATE, _I_SOFT, _I_RAMP = (
+    index(ForceClamp.NAME), index(ForceRateLimit.NAME), index(StrokeSoftFade.NAME), index(StopRamp.NAME)
+)
 
 
 class SupervisedCommand:
@@ -170,22 +135,15 @@ class Supervisor:
         self.predictive = StrokePredictiveLimit(config.stroke)
         self.clamp = ForceClamp(config.force)
         self.rate = ForceRateLimit(config.force)
-        self.tracking = ForceTracking(config.force)
-        self._estop, self._operator_trip = EStop(), OperatorTrip()
         #: The table against its record (:meth:`TableRecordCheck.expect` before the run; off until then).
         self.table_record = TableRecordCheck(config.run.max_stall_s)
         #: The check whose safe stop ended the run, and what it saw ("" when none did: the record's end, the operator).
         self.stop_reason = ""
         self.stop_detail = ""
-        self.detectors: tuple[Detector, ...] = (
-            self._estop, EStopLost(config.estop), self._operator_trip, OperatorStop(),
-            SensorInvalid(config.sensors), SensorStale(config.sensors), SensorJump(config.sensors),
-            SensorStuck(config.sensors), SensorSignFlip(config.sensors), SensorDisagree(config.sensors),
-            BusGone(), BusOff(), BusErrorPassive(config.comms), BusErrorFrames(config.comms),
-            E2eRejects(config.comms), BusSendFailures(config.comms), ForeignCommand(),
-            DriveFault(), HydraulicPressure(), ActuatorStatusStale(config.actuator), self.tracking,
-            LoopStall(config.run), TableRecordMismatch(self.table_record), TableRecordMarginal(self.table_record),
-        )
+        #: The detectors, in the order of :data:`harness.safety.checks.CHECKS`.
+        self.detectors: tuple[Detector, ...] = build_detectors(config, self.table_record)
+        self.tracking = self._detector(ForceTracking)
+        self._estop, self._operator_trip = self._detector(EStop), self._detector(OperatorTrip)
         self._bits = tuple(bit(d.NAME) for d in self.detectors)
         self._slots = tuple(index(d.NAME) for d in self.detectors)
         self._previous_N = 0.0
@@ -194,6 +152,13 @@ class Supervisor:
         #: The stopping ramp's event detail (fixed: built once here, not in a tick).
         self._ramp_detail = (f"force ramps to zero over {config.run.stopping_ramp_s:g} s (safety.run.stopping_ramp_s), "
                              "then the drive is disabled")
+
+    def _detector(self, kind: type[_D]) -> _D:
+        """The detector of class ``kind`` (:data:`~harness.safety.checks.CHECKS` holds each class once)."""
+        for detector in self.detectors:
+            if isinstance(detector, kind):
+                return detector
+        raise LookupError(f"the supervisor has no {kind.__name__} detector; expected one in harness.safety.checks.CHECKS")
 
     # ---------------------------------------------------------------- lifecycle requests
 
@@ -270,14 +235,14 @@ class Supervisor:
 
     def report_exception(self, t: float, exc: BaseException) -> SupervisedCommand:
         """The loop caught ``exc`` in a tick: trip with reason ``tick_exception``."""
-        return self.trip(t, "tick_exception", f"{type(exc).__name__}: {exc}")
+        return self.trip(t, TickException.NAME, f"{type(exc).__name__}: {exc}")
 
     def _still_present(self, health: TickHealth) -> str:
         reason = self.lifecycle.trip_reason
         meas = health.meas
-        if reason == "stroke_hard" and self.hard.check(meas.sliding_displacement_m):
+        if reason == StrokeHardLimit.NAME and self.hard.check(meas.sliding_displacement_m):
             return self.hard.detail(meas.sliding_displacement_m)
-        if reason == "stroke_predictive" and self.predictive.check(meas.sliding_displacement_m, meas.sliding_velocity_m_s):
+        if reason == StrokePredictiveLimit.NAME and self.predictive.check(meas.sliding_displacement_m, meas.sliding_velocity_m_s):
             return self.predictive.detail(meas.sliding_displacement_m, meas.sliding_velocity_m_s)
         for detector in self.detectors:
             if detector.NAME == reason:
@@ -313,7 +278,7 @@ class Supervisor:
         self.tracking.command_N = 0.0
         return command
 
-    def _count(self, t: float, slot: int, flag: int, name: str) -> bool:
+    def _count(self, slot: int, flag: int) -> bool:
         """Count an acting check; True on its rising edge (an event is due)."""
         self.act_ticks[slot] += 1
         self.command.acted |= flag
@@ -329,11 +294,11 @@ class Supervisor:
             if action is Action.TRIP:
                 self.trip(t, detector.NAME, detector.detail(health))
                 return True
-            if self._count(t, slots[k], bits[k], detector.NAME):
+            if self._count(slots[k], bits[k]):
                 self.events.push(t, EventKind.FAULT, detector.NAME, detector.detail(health))
             if action is Action.SAFE_STOP and self.lifecycle.state in (State.ARMED, State.RUNNING):
                 self.stop(t, detector.NAME)
-                if detector.NAME != "operator_stop":  # the operator's own stop is no check's reason
+                if detector.NAME != OperatorStop.NAME:  # the operator's own stop is no check's reason
                     self.stop_reason = detector.NAME
                     self.stop_detail = detector.detail(health)
         return False
@@ -354,23 +319,23 @@ class Supervisor:
         """
         state = self.lifecycle.state
         force = self.clamp.apply(raw_force_N)
-        if self.clamp.acted and self._count(t, _I_CLAMP, _B_CLAMP, "force_clamp"):
-            self.events.push(t, EventKind.INTERLOCK, "force_clamp", self.clamp.detail(raw_force_N))
+        if self.clamp.acted and self._count(_I_CLAMP, _B_CLAMP):
+            self.events.push(t, EventKind.INTERLOCK, ForceClamp.NAME, self.clamp.detail(raw_force_N))
         if state is State.ARMED:
             force = 0.0
         elif state is State.STOPPING:
             elapsed = t - self.lifecycle.entered_s
             force *= self._ramp_gain * max(0.0, 1.0 - elapsed / self.config.run.stopping_ramp_s)
-            if self._count(t, _I_RAMP, _B_RAMP, "stop_ramp"):
-                self.events.push(t, EventKind.INTERLOCK, "stop_ramp", self._ramp_detail)
+            if self._count(_I_RAMP, _B_RAMP):
+                self.events.push(t, EventKind.INTERLOCK, StopRamp.NAME, self._ramp_detail)
         demand, step_s = force, min(dt, self.period_s)
         force = self.rate.apply(demand, self._previous_N, step_s)
-        if self.rate.acted and self._count(t, _I_RATE, _B_RATE, "force_rate"):
-            self.events.push(t, EventKind.INTERLOCK, "force_rate", self.rate.detail(demand, self._previous_N, step_s))
+        if self.rate.acted and self._count(_I_RATE, _B_RATE):
+            self.events.push(t, EventKind.INTERLOCK, ForceRateLimit.NAME, self.rate.detail(demand, self._previous_N, step_s))
         demand = force
         force = self.soft.apply(demand, x_b_m)
-        if self.soft.acted and self._count(t, _I_SOFT, _B_SOFT, "stroke_soft"):
-            self.events.push(t, EventKind.INTERLOCK, "stroke_soft", self.soft.detail(demand, x_b_m))
+        if self.soft.acted and self._count(_I_SOFT, _B_SOFT):
+            self.events.push(t, EventKind.INTERLOCK, StrokeSoftFade.NAME, self.soft.detail(demand, x_b_m))
         return force
 
     def update(self, t: float, dt: float, health: TickHealth, raw_force_N: float) -> SupervisedCommand:
@@ -399,7 +364,7 @@ class Supervisor:
             return self._finish_tick(self._off(t))
         if not (math.isfinite(t) and math.isfinite(dt) and dt > 0.0):
             detail = f"t = {t!r} s, dt = {dt!r} s, expected finite t and dt > 0"
-            self.trip(t if math.isfinite(t) else 0.0, "loop_timing", detail)
+            self.trip(t if math.isfinite(t) else 0.0, LoopTiming.NAME, detail)
             return self._finish_tick(self.command)
         if self._run_detectors(t, dt, health) or not self._check_output_and_stroke(t, health, raw_force_N):
             return self._finish_tick(self.command)
@@ -420,14 +385,14 @@ class Supervisor:
     def _check_output_and_stroke(self, t: float, health: TickHealth, raw_force_N: float) -> bool:
         """False (and tripped) if the raw force is not finite or the stroke trips."""
         if not math.isfinite(raw_force_N):
-            self.trip(t, "controller_output", f"controller output not finite: {raw_force_N!r} N")
+            self.trip(t, ControllerOutput.NAME, f"controller output not finite: {raw_force_N!r} N")
             return False
         x_b, v_b = health.meas.sliding_displacement_m, health.meas.sliding_velocity_m_s
         if self.hard.check(x_b):
-            self.trip(t, "stroke_hard", self.hard.detail(x_b))
+            self.trip(t, StrokeHardLimit.NAME, self.hard.detail(x_b))
             return False
         if self.predictive.check(x_b, v_b):
-            self.trip(t, "stroke_predictive", self.predictive.detail(x_b, v_b))
+            self.trip(t, StrokePredictiveLimit.NAME, self.predictive.detail(x_b, v_b))
             return False
         return True
 

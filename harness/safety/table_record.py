@@ -305,14 +305,10 @@ class TableRecordCheck:
 class TableRecordMismatch(Detector):
     """The table plays another record than the one the harness was told.
 
-    Detects: the table velocity ``xdot_0`` against the told record's velocity, over the record
-    played so far: correlation below :data:`MISMATCH_CORRELATION`, or no correlation peak
-    within +/- :data:`MAX_LAG_S`, or an amplitude ratio outside :data:`MISMATCH_AMPLITUDE`.
-    Bound: the first evaluation after the gate (:func:`gate_index`), evaluations every
-    :data:`EVALUATE_EVERY_S` of record time. Action: SAFE_STOP (the force ramps to zero and
-    the table is stopped; the mismatch does not endanger the specimen, a trip's force step
-    would be the harsher act; docs/SAFETY.md). Reset: the verdict is the run's; the next arm
-    starts a new comparison.
+    The bounds are :data:`MISMATCH_CORRELATION`, :data:`MAX_LAG_S` and :data:`MISMATCH_AMPLITUDE`;
+    the gate is :func:`gate_index`, evaluations every :data:`EVALUATE_EVERY_S` of record time. A safe
+    stop, not a trip: the force ramps to zero and the table is stopped; the mismatch does not
+    endanger the specimen, and a trip's force step would be the harsher act (docs/SAFETY.md).
     """
 
     NAME = "table_record_mismatch"
@@ -346,11 +342,8 @@ class TableRecordMismatch(Detector):
 class TableRecordMarginal(Detector):
     """The table follows the told record, but not as a healthy table does: a warning.
 
-    Detects: an evaluation of :class:`TableRecordMismatch`'s comparison that is neither a
-    match nor a mismatch (correlation 0.5-0.9, or delay outside -10..+30 ms, or amplitude
-    ratio 0.5-0.75 or 1.33-2). Bound: as ``table_record_mismatch``. Action: INDICATE (an
-    event, the console, the outcome and the report warn; the reductions are flagged).
-    Reset: none (re-judged at every evaluation).
+    The verdict of :class:`TableRecordMismatch`'s comparison; the event, the console, the outcome
+    and the report warn, and the reductions are flagged.
     """
 
     NAME = "table_record_marginal"

@@ -16,7 +16,7 @@ from harness.identification.frf import read_frf_csv
 from harness.profile import load_profile
 from harness.recording import load_run
 from harness.runs.identify import IdentifyOptions, condition_profile, identify_actuator, run_condition
-from harness.safety.events import bit
+from harness.safety.checks import bit
 from harness.safety.lifecycle import State
 
 SHORT = ["--duration", "4", "--resolution-hz", "1", "--quiet"]

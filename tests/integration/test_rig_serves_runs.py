@@ -24,6 +24,7 @@ import pytest
 
 from drivers.decoder import RxStatus
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
+from drivers.rig_reader import NEW_SENDER_SILENCE_S
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness, open_rig
 from harness.cli import main
@@ -31,7 +32,6 @@ from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig
 from harness.rig.drive import ResetVerdict
 from harness.rig.faults import fault_id_for
-from harness.rig.inbox import NEW_SENDER_SILENCE_S
 from harness.rig.virtual_rig import RigParts, VirtualRig
 from harness.runs.drive_reset import DriveResetRefused, reset_drive
 from harness.runs.dry_run import RigCoordinator
@@ -152,18 +152,18 @@ def test_a_new_harness_first_reset_is_not_lost_to_the_rolling_counter(bench):
     fresh = open_harness(b.can)
     try:
         b.clock.now += NEW_SENDER_SILENCE_S + 0.1
-        before = b.rig.inbox.decoder.accepted("DRIVE_RESET")
+        before = b.rig.reader.decoder.accepted("DRIVE_RESET")
         fresh.writer.drive_reset(FaultCode.HEARTBEAT_WATCHDOG, b.clock.now)
         b.service()
-        assert b.rig.inbox.decoder.accepted("DRIVE_RESET") == before + 1, "the same counter, after a silence: accepted"
+        assert b.rig.reader.decoder.accepted("DRIVE_RESET") == before + 1, "the same counter, after a silence: accepted"
         assert b.rig.drive.state == DriveState.OFF
         fresh.writer.drive_reset(FaultCode.HEARTBEAT_WATCHDOG, b.clock.now)  # counter 1: a genuine next frame
         fresh.writer.drive_reset(FaultCode.HEARTBEAT_WATCHDOG, b.clock.now)
         b.service()
-        assert b.rig.inbox.decoder.accepted("DRIVE_RESET") == before + 3
+        assert b.rig.reader.decoder.accepted("DRIVE_RESET") == before + 3
         b.link.writer.drive_reset(FaultCode.NONE, b.clock.now)  # within the silence: counter checks apply
         b.service()
-        assert b.rig.inbox.decoder.accepted("DRIVE_RESET") == before + 3, "a repeated counter within a run is rejected"
+        assert b.rig.reader.decoder.accepted("DRIVE_RESET") == before + 3, "a repeated counter within a run is rejected"
     finally:
         fresh.close()
 
@@ -242,16 +242,16 @@ def test_a_harness_right_after_another_enters_lockstep_and_its_first_step_is_not
         link.writer.command(0.0, False, 0.0)
     link.writer.rig_control(RigCommand.NONE, True, 0.0)
     deadline = time.monotonic() + 5.0
-    while rig.inbox.decoder.accepted("ACTUATOR_CMD") < 3:
+    while rig.reader.decoder.accepted("ACTUATOR_CMD") < 3:
         assert time.monotonic() < deadline, "the rig must take the previous run's commands"
         time.sleep(0.01)
-    rejected_before = rig.inbox.decoder.rejected("ACTUATOR_CMD", RxStatus.SKIPPED_COUNTER)
+    rejected_before = rig.reader.decoder.rejected("ACTUATOR_CMD", RxStatus.SKIPPED_COUNTER)
 
     fresh = open_harness(served_can)
     try:
         coordinator = RigCoordinator(lockstep=True, period_s=PERIOD)
         coordinator.on_link(fresh)  # at once: well within NEW_SENDER_SILENCE_S of the previous frames
-        assert rig.inbox.decoder.rejected("ACTUATOR_CMD", RxStatus.SKIPPED_COUNTER) == rejected_before + 1, (
+        assert rig.reader.decoder.rejected("ACTUATOR_CMD", RxStatus.SKIPPED_COUNTER) == rejected_before + 1, (
             "the new harness's first command was rejected, and sent again"
         )
         assert coordinator.base_step == rig.step_index

@@ -1,7 +1,7 @@
 """The layering of the project, read from the source with :mod:`ast` (nothing is imported).
 
 - ``drivers/`` imports nothing from ``harness/``: the drivers know CAN and units, not the
-  profile, the controller or the supervisor (DESIGN.md, "one direction").
+  profile, the controller or the supervisor (docs/ARCHITECTURE.md, "One direction").
 - No two modules import each other, even inside a function or only for a type: the import
   graph has no cycle.
   An import of a package's module counts as an import of the package too, since Python runs
@@ -217,7 +217,7 @@ def test_the_import_graph_has_no_cycle() -> None:
 
 def test_no_ring_either_through_imports_made_for_a_type() -> None:
     # An import under ``if TYPE_CHECKING:`` runs no code, but a ring kept for a type still makes
-    # each module unreadable without the other (report/build.py and report/summary.py were one).
+    # each module unreadable without the other (harness/report/build.py and harness/report/summary.py were one).
     cycles = import_cycles(project_imports(type_checking=True))
     assert not cycles, f"modules that import each other, counting imports for types: {cycles}"
 

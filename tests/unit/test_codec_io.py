@@ -1,4 +1,4 @@
-"""drivers/reader.py, drivers/writer.py and drivers/bus.BusHealth: samples, ages, counters, accounting."""
+"""drivers/reader.py, drivers/rig_reader.py, drivers/writer.py and drivers/bus.py's BusHealth: samples, ages, counters."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from drivers import bus as busmod
+from drivers import rig_reader
 from drivers.bus import BusHealth, open_bus
 from drivers.codec import load_protocol
 from drivers.decoder import RxStatus
@@ -22,7 +23,8 @@ from drivers.errors import BusError, ProtocolError
 from drivers.link import open_harness, open_rig
 from drivers.measurements import Measurements
 from drivers.protocol_values import DriveState, FaultCode, RigCommand
-from drivers.reader import FrameReader, HarnessReader, RigReader
+from drivers.reader import FrameReader, HarnessReader, damaged_estop
+from drivers.rig_reader import RigReader
 from drivers.writer import HarnessWriter, RigWriter
 
 PROTOCOL = load_protocol()
@@ -222,6 +224,33 @@ def test_damaged_estop_frames_fail_safe(damage: str) -> None:
     assert reader.estop_requested
 
 
+def _unreadable_estop(damage: str) -> can.Message:
+    estop_id = PROTOCOL["ESTOP"].frame_id
+    if damage == "crc":
+        bad = frame("ESTOP", [0.0, 0.0, 0.0], 1)
+        bad.data[2] ^= 0x80
+        return bad
+    if damage == "length":
+        return can.Message(arbitration_id=estop_id, is_extended_id=False, data=bytes(2))
+    return can.Message(arbitration_id=estop_id, is_extended_id=False, is_remote_frame=True, dlc=8)
+
+
+@pytest.mark.parametrize("damage", ["crc", "length", "remote"])
+def test_both_sides_take_an_unreadable_estop_frame_for_a_stop_request(damage: str) -> None:
+    release = frame("ESTOP", [0.0, 0.0, 0.0], 0)
+    harness = harness_reader(FakeBus([release, _unreadable_estop(damage)]))
+    harness.poll(1.0)
+    assert harness.estop_requested
+    rig = RigReader(FakeBus([release, _unreadable_estop(damage)]), PROTOCOL)  # type: ignore[arg-type]
+    assert rig.receive() == rig_reader.OTHER  # an intact release is no stop
+    assert rig.receive() == rig_reader.ESTOP
+
+
+def test_only_a_frame_that_cannot_be_read_is_a_damaged_estop() -> None:
+    unreadable = {status for status in RxStatus if damaged_estop(status)}
+    assert unreadable == {RxStatus.NOT_DATA, RxStatus.WRONG_LENGTH, RxStatus.BAD_CRC}
+
+
 def test_skipped_counter_release_frame_does_not_latch() -> None:
     bus = FakeBus([frame("ESTOP", [0.0, 0.0, 0.0], 0), frame("ESTOP", [0.0, 0.0, 0.0], 9)])
     reader = harness_reader(bus)
@@ -340,16 +369,18 @@ def test_harness_and_rig_talk_over_a_virtual_bus() -> None:
         assert rw.rig_status(True, True, False, 12.3456, (1 << 24) + 7, 0.0)
         assert hw.command(2500.0, True, 0.0) and hw.heartbeat(3, 0.0)
         assert hw.rig_control(RigCommand.START_TABLE, True, 0.0, fault_id=2, fault_param=0.004)
-        assert _drain(hr, 6) == 6 and _drain(rr, 3) == 3
+        assert _drain(hr, 6) == 6
+        assert [rr.receive(0.0) for _ in range(4)] == [rig_reader.COMMAND, rig_reader.HEARTBEAT, rig_reader.CONTROL,
+                                                       rig_reader.NOTHING]
         assert hr.sample("STORY_DRIFTS").values == pytest.approx([0.001, -0.002, 0.003])
         assert hr.sample("FLOOR_ACCELS").values == pytest.approx([1.5, -2.5, 3.5])
         assert hr.status.values == pytest.approx([2.0, 1.0, 0.0, -1234.0])
         assert (hr.drive_state, hr.pressure_ok, hr.fault_code, hr.measured_force_n) == (2, True, 0, -1234.0)
         assert hr.drive_ready and not hr.drive_fault
         assert hr.sample("RIG_STATUS").values == pytest.approx([1.0, 1.0, 0.0, 12.3456, 7.0])
-        assert rr.command.values == [1.0, 2500.0] and rr.heartbeat.values == [3.0]
-        assert rr.control.values == pytest.approx([1.0, 1.0, 2.0, 0.004], rel=1e-6)
-        assert hr.e2e_ok() and rr.e2e_ok() and not hr.foreign_command_seen
+        assert rr.command == [1.0, 2500.0] and rr.heartbeat == [3.0]
+        assert rr.control == pytest.approx([1.0, 1.0, 2.0, 0.004], rel=1e-6)
+        assert hr.e2e_ok() and rr.decoder.counts[RxStatus.OK] == 3 and not hr.foreign_command_seen
 
 
 def test_links_open_both_sides_and_close_idempotently() -> None:
@@ -360,9 +391,10 @@ def test_links_open_both_sides_and_close_idempotently() -> None:
         assert 0 < harness.load.share <= 0.5
         assert rig.writer.table(0.003, 0.0, 0.0, now=0.0)
         assert harness.writer.command(-50.0, False, now=0.0)
-        assert _drain(harness.reader, 1) == 1 and _drain(rig.reader, 1) == 1
+        rig_side = RigReader(rig.bus, rig.protocol)
+        assert _drain(harness.reader, 1) == 1 and rig_side.receive(1.0) == rig_reader.COMMAND
         assert harness.reader.table.values[0] == pytest.approx(0.003)
-        assert rig.reader.command.values == [0.0, -50.0]
+        assert rig_side.command == [0.0, -50.0]
     harness.close()  # again, after the with block: no error
     assert harness.writer.heartbeat(1, now=0.0) is False
 

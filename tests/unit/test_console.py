@@ -22,7 +22,6 @@ from rich.console import Console
 
 import harness.console.live
 from harness.console.live import LiveConsole, view_command, view_environment
-from harness.loop.runner import LoopStatus as LoopStatusFromRunner
 from harness.loop.status import STATE_NAMES, LoopStatus
 from harness.loop.status_block import truncate_utf8
 from harness.safety.lifecycle import State
@@ -61,10 +60,6 @@ def _process_gone(pid: int) -> bool:
 def test_state_codes_are_the_lifecycle_states():
     assert STATE_NAMES == tuple(state.name for state in State)
     assert all(STATE_NAMES[state.value] == state.name for state in State)
-
-
-def test_runner_still_exports_loop_status():
-    assert LoopStatusFromRunner is LoopStatus
 
 
 def test_keyword_construction_sets_fields_and_refuses_unknown_ones():

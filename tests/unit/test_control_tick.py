@@ -17,6 +17,7 @@ import pytest
 from drivers.codec import load_protocol
 from drivers.e2e import protect
 from drivers.protocol_values import DriveState, EstopSource, FaultCode
+from drivers.reader import RIG_RX, FrameReader
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness, open_rig
 from harness.control.estimator import FrictionEstimator
@@ -55,6 +56,8 @@ class Bench:
         profile = load_profile(None, overrides=["safety.force.velocity_feedback_Ns_per_m=0"])
         can = CanConfig(interface="virtual", channel=f"tick-{uuid.uuid4().hex[:8]}")
         self.rig = open_rig(can)
+        #: The rig side's view of what the harness sent: the latest frame of each message, and a tap for each frame.
+        self.rig_side = FrameReader(self.rig.bus, self.rig.protocol, RIG_RX, health=self.rig.health)
         self.link = open_harness(can)
         self.controller = FixedForce()
         self.supervisor = Supervisor(safety or profile.safety, period_s=PERIOD_S)
@@ -88,9 +91,9 @@ class Bench:
         self.publish()
         command = self.tick.run(self.t, PERIOD_S, self.t)
         self.t += PERIOD_S
-        sample = self.rig.reader.command
+        sample = self.rig_side.sample("ACTUATOR_CMD")
         before = sample.count
-        self.rig.reader.poll(self.t)
+        self.rig_side.poll(self.t)
         assert sample.count == before + 1, "exactly one actuator command per tick"
         enable, force = sample.values[sample.index("enable")], sample.values[sample.index("force")]
         return command, (bool(enable), force)
@@ -157,8 +160,8 @@ def test_an_exception_in_recording_trips_and_sends_zero_at_once(bench):
     b.tick.recorder = BrokenRecorder()
     b.publish()
     command = b.tick.run(b.t, PERIOD_S, b.t)
-    sample = b.rig.reader.command
-    b.rig.reader.poll(b.t)
+    sample = b.rig_side.sample("ACTUATOR_CMD")
+    b.rig_side.poll(b.t)
     assert command.trip_reason == "tick_exception"
     assert (bool(sample.values[sample.index("enable")]), sample.values[sample.index("force")]) == (False, 0.0)
 
@@ -292,7 +295,7 @@ class _Flags:
     ("error_passive", "bus_error_passive", State.STOPPING),  # safe_stop by default
 ])
 def test_each_flag_the_drivers_report_reaches_the_supervisor_through_the_tick(bench, monkeypatch, fault, reason, state):
-    from harness.safety.events import bit
+    from harness.safety.checks import bit
 
     b = bench()
     b.run_until_running()
@@ -323,7 +326,7 @@ def test_the_heartbeat_goes_out_on_every_nth_tick_from_the_first(every: int, tic
     b = Bench()
     try:
         b.tick = ControlTick(b.link, b.controller, b.tick.estimator, b.supervisor, None, heartbeat_every=every)
-        heartbeat = b.rig.reader.sample("HEARTBEAT")
+        heartbeat = b.rig_side.sample("HEARTBEAT")
         seen = []
         for k in range(12):
             before = heartbeat.count

@@ -17,6 +17,8 @@ from harness.safety.actuator_detectors import (
     ForceTracking,
     HydraulicPressure,
 )
+from harness.safety.checks import CHECK_NAMES
+from harness.safety.checks_doc import SAFETY_TABLE
 from harness.safety.comms_detectors import (
     BusErrorFrames,
     BusErrorPassive,
@@ -34,7 +36,7 @@ from harness.safety.config import (
     SensorConfig,
 )
 from harness.safety.detector_base import Persistence, WindowCounter
-from harness.safety.events import CHECK_NAMES, Action
+from harness.safety.events import Action
 from harness.safety.health import TickHealth
 from harness.safety.operator_detectors import (
     EStop,
@@ -51,7 +53,6 @@ from harness.safety.sensor_detectors import (
     SensorStale,
     SensorStuck,
 )
-from harness.safety.table import SAFETY_TABLE
 from tests.conftest import PROFILES
 
 DT = 0.001
@@ -590,18 +591,6 @@ def test_safety_table_has_one_complete_record_per_check() -> None:
     for record in SAFETY_TABLE:
         assert all(record), record
         assert record.action in {"indicate", "clamp", "fade", "safe_stop", "trip"}
-
-
-@pytest.mark.parametrize("cls", [
-    SensorInvalid, SensorStale, SensorJump, SensorStuck, SensorDisagree, SensorSignFlip, E2eRejects, BusErrorFrames,
-    BusErrorPassive, BusOff, BusGone, BusSendFailures, ForeignCommand, DriveFault, HydraulicPressure,
-    ActuatorStatusStale, ForceTracking, LoopStall, EStop, OperatorStop, OperatorTrip,
-])
-def test_each_detector_documents_detects_bound_action_reset(cls: type) -> None:
-    doc = cls.__doc__ or ""
-    for word in ("Detects", "Bound", "Action", "Reset"):
-        assert word in doc, f"{cls.__name__} docstring lacks {word}"
-    assert cls.NAME in CHECK_NAMES
 
 
 def test_force_tracking_reset_clears_the_actuator_lag_to_zero_and_keeps_it_lagging() -> None:

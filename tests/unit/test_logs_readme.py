@@ -5,7 +5,8 @@ from __future__ import annotations
 import re
 
 from drivers.protocol_values import DriveState, FaultCode
-from harness.safety.events import CHECK_NAMES, EventKind
+from harness.safety.checks import CHECK_NAMES
+from harness.safety.events import EventKind
 from harness.safety.lifecycle import State
 from tests.conftest import REPO
 

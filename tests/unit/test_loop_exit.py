@@ -57,7 +57,7 @@ class Lockstep:
         b = self.bench
         if self.exc is not None and b.controller.running_ticks == FAULT_AFTER_TICKS:
             raise self.exc
-        b.rig.reader.poll(b.t)  # the rig takes what the previous tick sent (the tap records it)
+        b.rig_side.poll(b.t)  # the rig takes what the previous tick sent (the tap records it)
         b.t = k * PERIOD_S
         b.publish()
         b.tick.reader.poll(b.t)
@@ -74,14 +74,14 @@ def bench():
 def _loop(bench: Bench, in_tick: BaseException | None, in_loop: BaseException | None = None) -> tuple[ControlLoop, Wire]:
     bench.controller = bench.tick.controller = RaisingController(bench, in_tick)
     wire = Wire()
-    bench.rig.reader.tap = wire
+    bench.rig_side.tap = wire
     loop = ControlLoop(bench.tick, CONFIG, 1.0 / PERIOD_S, 0.2, lockstep=Lockstep(bench, in_loop))
     return loop, wire
 
 
 def _commands(bench: Bench, wire: Wire) -> list[tuple[bool, float]]:
     """Every ACTUATOR_CMD the rig received, in order, as (enable, force_N)."""
-    bench.rig.reader.poll(bench.t + PERIOD_S)
+    bench.rig_side.poll(bench.t + PERIOD_S)
     return [(bool(v[CMD.index("enable")]), v[CMD.index("force")]) for v in wire.of(CMD.frame_id)]
 
 
@@ -142,8 +142,8 @@ def test_a_base_exception_inside_a_tick_also_sends_the_trips_estop(bench) -> Non
 
     from harness.loop.tick import ControlTick
     from harness.loop.trip_outputs import SUPERVISOR_SOURCE
+    from harness.safety.checks import CHECK_NAMES
     from harness.safety.config import TripActionsConfig
-    from harness.safety.events import CHECK_NAMES
     from harness.safety.supervisor import Supervisor
 
     safety = dataclasses.replace(bench.supervisor.config, trip_actions=TripActionsConfig(internal=("disable", "estop")))

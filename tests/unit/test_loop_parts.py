@@ -12,7 +12,7 @@ from rich.console import Console
 
 from harness.console.live import LiveConsole, stroke_bar
 from harness.loop.operator import OperatorSignals
-from harness.loop.runner import LoopStatus
+from harness.loop.status import LoopStatus
 from harness.loop.timing import TimingStats
 from harness.realtime.host import RealtimeConfig, apply_realtime, restore_realtime
 
@@ -75,10 +75,8 @@ def test_console_shows_state_stroke_force_timing_and_the_last_event():
     status = LoopStatus(state="TRIPPED", trip_reason="stroke_hard", run_t_s=12.0, duration_s=30.0, stroke_m=0.0952,
                         force_N=-2500.0, sliding_variable=0.0123, overruns=2, e2e_rejects=3,
                         last_event="12.000 s fault stroke_hard")
-    stats = TimingStats(10)
-    stats.add(5e-6, 1e-5)
     console = Console(record=True, width=120)
-    live = LiveConsole(status, 0.08, 0.1, 10_000.0, "test", stats, console, enabled=False)
+    live = LiveConsole(status, 0.08, 0.1, 10_000.0, "test", console, enabled=False)
     console.print(live)
     text = console.export_text()
     for expected in (

@@ -8,6 +8,6 @@ from tests.conftest import REPO
 
 def test_the_folders_are_the_checkouts_own():
     assert PROJECT_ROOT == REPO
-    assert LOG_DIR == REPO / "logs"  # a module moved into harness/runs/ once wrote them to harness/logs/
+    assert LOG_DIR == REPO / "logs"  # a module moved into harness/runs/ once wrote them into the package
     assert (PROFILE_DIR / "nceer_4dof.yaml").is_file()
     assert (LOG_DIR / "README.md").is_file()

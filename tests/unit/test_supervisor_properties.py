@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from harness.errors import SafetyError
+from harness.safety.checks import bit
 from harness.safety.config import SafetyConfig, SensorConfig, StrokeConfig
-from harness.safety.events import bit
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import DRIVE_STATES, State
 from harness.safety.supervisor import Supervisor

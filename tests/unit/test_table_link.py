@@ -24,12 +24,12 @@ def bench():
 def test_the_link_sends_start_and_stop_and_reads_running(bench):
     link = CanTableLink()
     link.attach(bench.link)
-    control = bench.rig.reader.control
+    control = bench.rig_side.sample("RIG_CONTROL")
     link.start(0.0)
-    bench.rig.reader.poll(0.0)
+    bench.rig_side.poll(0.0)
     assert control.values[control.index("command")] == RigCommand.START_TABLE
     assert link.stop(0.01)
-    bench.rig.reader.poll(0.01)
+    bench.rig_side.poll(0.01)
     assert control.values[control.index("command")] == RigCommand.STOP_TABLE and (link.starts, link.stops) == (1, 1)
     assert not link.running()
     bench.rig.writer.rig_status(True, False, False, 0.0, 0, 0.02)

@@ -14,8 +14,8 @@ from harness.loop.trip_outputs import TripOutputs
 from harness.motions.online_tracking import OnlineTracking
 from harness.motions.tracking import tracking
 from harness.report.table_check import table_check
+from harness.safety.checks import bit
 from harness.safety.config import SafetyConfig, SensorConfig, TripActionsConfig
-from harness.safety.events import bit
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import Supervisor

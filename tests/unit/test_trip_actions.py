@@ -19,8 +19,8 @@ from harness.canbus.config import CanConfig
 from harness.errors import ProfileError
 from harness.loop.trip_outputs import SUPERVISOR_SOURCE, TripOutputs
 from harness.profile import load_profile
+from harness.safety.checks import CHECK_NAMES
 from harness.safety.config import EStopConfig, TripActionsConfig, check_config
-from harness.safety.events import CHECK_NAMES
 from harness.safety.lifecycle import ArmRefused, State
 from tests.unit.test_control_tick import PERIOD_S, Bench
 
@@ -59,7 +59,7 @@ def _bench(safety=None, stop_table: bool = True) -> tuple[Bench, Wire]:
     if stop_table:
         b.tick.trip_outputs.stop_table = lambda now: b.link.writer.rig_control(STOP_TABLE, False, now)
     wire = Wire()
-    b.rig.reader.tap = wire
+    b.rig_side.tap = wire
     return b, wire
 
 

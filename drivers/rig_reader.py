@@ -1,13 +1,13 @@
 """The rig's receive side: one frame at a time, so every command frame is one event.
 
-:class:`~drivers.reader.RigReader` keeps only the latest sample of each message,
-which is right for a control loop but loses events for the rig: in lockstep every
-ACTUATOR_CMD frame is a step, and two RIG_CONTROL frames in one poll are two
-commands. :class:`RigInbox` therefore takes frames off the bus one by one (blocking
-up to a timeout when asked, so the lockstep thread does not spin) and checks and
-decodes each with the drivers' :class:`~drivers.decoder.Decoder` (same E2E checks
-and counts). A damaged frame on the E-stop ID counts as a stop request, as in the
-drivers' reader.
+The harness's :class:`~drivers.reader.FrameReader` keeps only the latest sample of each
+message, which is right for a control loop but loses events for the rig: in lockstep every
+ACTUATOR_CMD frame is a step, and two RIG_CONTROL frames in one poll are two commands.
+:class:`RigReader` therefore takes frames off the bus one by one (blocking up to a timeout
+when asked, so the lockstep thread does not spin) and checks and decodes each with the
+:class:`~drivers.decoder.Decoder` (same E2E checks and counts). A frame on the E-stop ID too
+damaged to read counts as a stop request, by the same rule as the harness's reader
+(:func:`drivers.reader.damaged_estop`).
 
 The rig outlives the harness: it serves run after run, each from a new harness process
 whose rolling counters start again at 0. A message silent for longer than
@@ -27,8 +27,8 @@ import can
 
 from drivers.codec import Protocol
 from drivers.decoder import Decoder, RxStatus
-from drivers.reader import RIG_RX
-from harness.errors import BusError
+from drivers.errors import BusError
+from drivers.reader import RIG_RX, damaged_estop
 
 #: A message silent this long (s) comes from a new sender: its counter history is forgotten.
 NEW_SENDER_SILENCE_S = 0.5
@@ -36,8 +36,8 @@ NEW_SENDER_SILENCE_S = 0.5
 NOTHING, COMMAND, HEARTBEAT, CONTROL, ESTOP, REJECTED, OTHER, DRIVE_RESET = 0, 1, 2, 3, 4, 5, 6, 7
 
 
-class RigInbox:
-    """Receives and decodes the harness's frames for the rig.
+class RigReader:
+    """Receives and decodes the harness's frames for the rig (virtual rig, servo controller).
 
     Parameters
     ----------
@@ -113,7 +113,7 @@ class RigInbox:
         if kind == ESTOP:
             if status == RxStatus.OK:
                 return ESTOP if self.estop[self._estop_active] else OTHER
-            return ESTOP if status in (RxStatus.WRONG_LENGTH, RxStatus.BAD_CRC, RxStatus.NOT_DATA) else REJECTED
+            return ESTOP if damaged_estop(status) else REJECTED
         if status != RxStatus.OK:
             return REJECTED if kind != OTHER else OTHER
         return kind
