@@ -96,10 +96,11 @@ def sliding_record(run: RunData, building: BuildingConfig) -> ff.SlidingRecord:
     require_columns(run, needed, PURPOSE)
     rate_hz, signals = uniform_signals(run, needed)
     floors = [signals[layout.floor_acceleration(j)] for j in range(1, building.n_stories + 1)]
-    friction = friction_from_balance(building, signals[actuator_force_column(run)], signals[layout.SLIDING_DISPLACEMENT],
-                                     signals[layout.BASE_ACCELERATION], floors)
+    actuator = signals[actuator_force_column(run)]
+    others = friction_from_balance(building, np.zeros_like(actuator), signals[layout.SLIDING_DISPLACEMENT],
+                                   signals[layout.BASE_ACCELERATION], floors)
     displacement = ff.fused_displacement(signals[layout.SLIDING_DISPLACEMENT], signals[layout.SLIDING_VELOCITY], rate_hz)
-    return ff.SlidingRecord(run.path.name, rate_hz, displacement, signals[layout.SLIDING_VELOCITY], friction)
+    return ff.SlidingRecord(run.path.name, rate_hz, displacement, signals[layout.SLIDING_VELOCITY], actuator, others)
 
 
 def overlay_values(fit: ff.FrictionFit) -> list[OverlayValue]:
@@ -148,6 +149,7 @@ def identify_bearing(paths: Sequence[Path | str], out_dir: Path, lowpass_hz: flo
         "fit": {
             "rms_error_N": fit.rms_error_N, "peak_friction_N": fit.peak_friction_N,
             "relative_rms_error": fit.relative_rms_error, "correlation_samples": fit.correlation_samples,
+            "load_cell_delay_s": fit.delay_s, "load_cell_delay_se_s": fit.delay_se_s,
             "evaluations": fit.evaluations, "lowpass_hz": lowpass_hz, "crossover_hz": ff.CROSSOVER_HZ,
             "method": "scipy.optimize.least_squares (trf), standard errors from the Jacobian, inflated by the "
                       "residuals' correlation time",

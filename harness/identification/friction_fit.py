@@ -23,9 +23,15 @@ Two things make the fit work at the rig's noise:
   is tens of newtons per sample, and whose sensors are read at different rates. Filtering
   both the same way keeps the comparison fair at the sharp friction reversals.
 
+- **the load cell's timing** is fitted too: the load cell and the motion sensors reach the
+  loop with different delays (on the virtual rig in lockstep the motion sensors' 1 ms is a
+  whole 2 ms tick, the load cell's none), and a tick's misalignment between the actuator's
+  force and the inertia forces it balances put ``a_mu`` 10 % off in a dry run. The force
+  balance takes the actuator's force ``delay`` earlier (linear between samples).
+
 The fit is :func:`scipy.optimize.least_squares` (trust-region reflective, bounded), started
 from the profile's values, in parameters that keep the law valid: ``mu_max``,
-``mu_delta / mu_max`` in [0, 1], and the logarithms of ``a_mu`` and ``D_y``. Standard errors
+``mu_delta / mu_max`` in [0, 1], the logarithms of ``a_mu`` and ``D_y``, and the delay. Standard errors
 come from its Jacobian (:mod:`harness.identification.fit_statistics`). Whether the data
 determine a parameter is judged twice: the motion must hold what the parameter shapes
 (:func:`coverage`), and its relative standard error must be below
@@ -58,6 +64,8 @@ SLIDING_SPEED_M_S = 0.005
 MIN_COVERAGE_S = 0.5
 #: Largest relative standard error of a determined parameter.
 DETERMINED_RELATIVE_ERROR = 0.1
+#: Largest load-cell delay searched, either way (s).
+MAX_DELAY_S = 0.01
 
 
 @dataclass(frozen=True)
@@ -74,19 +82,30 @@ class SlidingRecord:
         Sliding displacement ``x_b`` (m), fused (:func:`fused_displacement`).
     velocity_m_s : ndarray
         Sliding velocity ``xdot_b`` (m/s), as measured.
-    friction_N : ndarray
-        Friction force from the force balance (N), unfiltered.
+    actuator_force_N : ndarray
+        The load cell's force ``u`` (N).
+    other_forces_N : ndarray
+        The rest of the force balance, ``-k_b x_b - m_b a_b - sum_j m_j a_j`` (N): the friction is their sum.
     """
 
     label: str
     rate_hz: float
     displacement_m: np.ndarray
     velocity_m_s: np.ndarray
-    friction_N: np.ndarray
+    actuator_force_N: np.ndarray
+    other_forces_N: np.ndarray
 
     @property
     def duration_s(self) -> float:
-        return (len(self.friction_N) - 1) / self.rate_hz
+        return (len(self.velocity_m_s) - 1) / self.rate_hz
+
+    def friction_N(self, delay_s: float = 0.0) -> np.ndarray:
+        """The friction force of the force balance (N), with the load cell's force taken ``delay_s`` earlier."""
+        force = self.actuator_force_N
+        if delay_s != 0.0:
+            t = np.arange(len(force)) / self.rate_hz
+            force = np.interp(t - delay_s, t, force)
+        return force + self.other_forces_N
 
 
 @dataclass(frozen=True)
@@ -138,6 +157,8 @@ class FrictionFit:
         RMS of measured minus fitted force, both low-passed (N).
     peak_friction_N : float
         Largest |measured force|, low-passed (N).
+    delay_s, delay_se_s : float
+        The load cell's delay against the motion sensors (s), and its standard error.
     correlation_samples : float
         The residuals' integrated autocorrelation time (samples).
     evaluations : int
@@ -156,6 +177,8 @@ class FrictionFit:
     bearing: BearingConfig
     rms_error_N: float
     peak_friction_N: float
+    delay_s: float
+    delay_se_s: float
     correlation_samples: float
     evaluations: int
     measured_N: tuple[np.ndarray, ...]
@@ -219,7 +242,7 @@ def nu_along(displacement_m: np.ndarray, nu0: float, params: np.ndarray) -> np.n
 
 
 class _Model:
-    """The friction law over the records, in the fit's parameters ``(mu_max, mu_delta/mu_max, ln a_mu, ln D_y)``."""
+    """The friction law over the records, in the fit's parameters ``(mu_max, mu_delta/mu_max, ln a_mu, ln D_y, delay in ms)``."""
 
     def __init__(self, records: Sequence[SlidingRecord], design: BearingConfig, weight_N: float, lowpass_hz: float):
         self.records = tuple(records)
@@ -227,8 +250,12 @@ class _Model:
         self.params = design.packed(weight_N)
         self.bound = design.nu_bound
         self.filters = [_lowpass(record.rate_hz, lowpass_hz) for record in self.records]
-        self.measured = tuple(_filtered(sos, record.friction_N) for sos, record in zip(self.filters, self.records, strict=True))
+        self.measured = self.balance(0.0)
         self.evaluations = 0
+
+    def balance(self, delay_s: float) -> tuple[np.ndarray, ...]:
+        """Per record the low-passed friction force of the force balance with the load cell ``delay_s`` earlier."""
+        return tuple(_filtered(sos, record.friction_N(delay_s)) for sos, record in zip(self.filters, self.records, strict=True))
 
     @staticmethod
     def physical(theta: np.ndarray) -> np.ndarray:
@@ -256,7 +283,8 @@ class _Model:
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         forces, _ = self.response(theta)
-        return np.concatenate([f - m for f, m in zip(forces, self.measured, strict=True)])
+        measured = self.balance(theta[4] * 1e-3)
+        return np.concatenate([f - m for f, m in zip(forces, measured, strict=True)])
 
 
 def _lowpass(rate_hz: float, corner_hz: float) -> np.ndarray | None:
@@ -272,10 +300,11 @@ def _filtered(sos: np.ndarray | None, values: np.ndarray) -> np.ndarray:
 
 def _start(design: BearingConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Start, lower and upper bounds of ``theta`` (the design's values, nudged inside the bounds)."""
-    lower = np.array([1e-4, 0.0, math.log(0.01), math.log(1e-7)])
-    upper = np.array([1.0, 1.0, math.log(1e5), math.log(1e-2)])
+    lower = np.array([1e-4, 0.0, math.log(0.01), math.log(1e-7), -1e3 * MAX_DELAY_S])
+    upper = np.array([1.0, 1.0, math.log(1e5), math.log(1e-2), 1e3 * MAX_DELAY_S])
     ratio = design.mu_delta / design.mu_max if design.mu_max > 0 else 0.5
-    start = np.array([design.mu_max, ratio, math.log(max(design.a_mu_s_per_m, 0.02)), math.log(design.yield_displacement_m)])
+    start = np.array([design.mu_max, ratio, math.log(max(design.a_mu_s_per_m, 0.02)), math.log(design.yield_displacement_m),
+                      0.0])
     margin = 1e-6 * (upper - lower)
     return np.clip(start, lower + margin, upper - margin), lower, upper
 
@@ -345,13 +374,14 @@ def fit_friction(
                 f"(only a lower bound of (mu_max - mu_delta) mbar g: {peak_N:.4g} N)")
         return _unfitted(model, design, peak_N, slid, note)
     start, lower, upper = _start(design)
-    solution = optimize.least_squares(model.residuals, start, bounds=(lower, upper), x_scale=np.array([0.01, 0.1, 0.3, 0.3]))
+    solution = optimize.least_squares(model.residuals, start, bounds=(lower, upper),
+                                      x_scale=np.array([0.01, 0.1, 0.3, 0.3, 0.5]))
     theta = solution.x
     tau = correlation_time(solution.fun)
     cov_theta = covariance(solution.jac, solution.fun, tau)
     gradient = np.diag([1.0, 0.0, math.exp(theta[2]), math.exp(theta[3])])
     gradient[1, 0], gradient[1, 1] = theta[1], theta[0]  # mu_delta = mu_max * ratio
-    cov = gradient @ cov_theta @ gradient.T
+    cov = gradient @ cov_theta[:4, :4] @ gradient.T
     values = model.physical(theta)
     errors = np.sqrt(np.maximum(np.diag(cov), 0.0))
     enough = coverage(records, float(values[2]))
@@ -366,11 +396,12 @@ def fit_friction(
         estimates[name] = ParameterEstimate(name, float(values[i]), float(errors[i]), float(designs[i]), covered and precise,
                                             reason)
     fitted_forces, fitted_nu = model.response(theta)
+    delay_s, delay_se_s = float(theta[4] * 1e-3), float(math.sqrt(max(cov_theta[4, 4], 0.0)) * 1e-3)
     bearing = dataclasses.replace(design, mu_max=float(values[0]), mu_delta=float(values[1]), a_mu_s_per_m=float(values[2]),
                                   yield_displacement_m=float(values[3]))
     rms = float(np.sqrt(np.mean(solution.fun**2)))
-    return FrictionFit(estimates, bearing, rms, peak_N, tau, model.evaluations, model.measured, tuple(fitted_forces),
-                       tuple(fitted_nu), slid)
+    return FrictionFit(estimates, bearing, rms, peak_N, delay_s, delay_se_s, tau, model.evaluations, model.balance(delay_s),
+                       tuple(fitted_forces), tuple(fitted_nu), slid)
 
 
 def _unfitted(model: _Model, design: BearingConfig, peak_N: float, slid: tuple[bool, ...], note: str) -> FrictionFit:
@@ -381,5 +412,5 @@ def _unfitted(model: _Model, design: BearingConfig, peak_N: float, slid: tuple[b
     estimates = {name: ParameterEstimate(name, float(value), math.inf, float(value), False, f"not determined: {note}")
                  for name, value in zip(PARAMETERS, designs, strict=True)}
     residual = np.concatenate([f - m for f, m in zip(forces, model.measured, strict=True)])
-    return FrictionFit(estimates, design, float(np.sqrt(np.mean(residual**2))), peak_N, 1.0, model.evaluations,
-                       model.measured, tuple(forces), tuple(nus), slid, note)
+    return FrictionFit(estimates, design, float(np.sqrt(np.mean(residual**2))), peak_N, 0.0, math.inf, 1.0,
+                       model.evaluations, model.measured, tuple(forces), tuple(nus), slid, note)

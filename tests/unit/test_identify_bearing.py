@@ -76,6 +76,21 @@ def test_the_fit_finds_a_bearing_unlike_the_design_at_the_rigs_noise(earthquake,
     assert fit.relative_rms_error < 0.06
 
 
+def test_a_load_cell_read_late_is_found_and_does_not_bias_the_law(earthquake, tmp_path):
+    def fitted(columns, name):
+        folder = write_run(tmp_path, name, columns, DESIGN)
+        return ff.fit_friction([sliding_record(load_run(folder), DESIGN.structure)], DESIGN.bearing,
+                               DESIGN.structure.total_weight_N)
+
+    columns = measured(earthquake, DESIGN)
+    on_time = fitted(columns, "on_time")  # the floors' half-rate reading lags them about a millisecond already
+    columns[layout.FORCE_MEASURED] = np.concatenate([columns[layout.FORCE_MEASURED][:2], columns[layout.FORCE_MEASURED][:-2]])
+    fit = fitted(columns, "late")  # the load cell two ticks (4 ms) behind the motion sensors
+    assert fit.delay_s - on_time.delay_s == pytest.approx(-0.004, abs=0.0005)  # its force belongs 4 ms earlier
+    assert fit.estimates["a_mu_s_per_m"].value == pytest.approx(TRUTH.a_mu_s_per_m, rel=0.1)
+    assert fit.estimates["mu_delta"].value == pytest.approx(TRUTH.mu_delta, rel=0.1)
+
+
 def test_a_run_that_slid_only_slowly_cannot_give_mu_max(tmp_path):
     slow = simulate(DESIGN.structure, TRUTH, table_motion("synthetic:3", 0.1, 30.0))
     assert 0.005 < np.abs(slow[layout.SLIDING_VELOCITY]).max() < 3.0 / TRUTH.a_mu_s_per_m  # never near mu_max's speeds
@@ -144,5 +159,5 @@ def test_the_sliding_record_reads_the_load_cell_not_the_command(earthquake, tmp_
     floors = [columns[layout.floor_acceleration(j)] for j in (1, 2, 3)]
     expected = friction_from_balance(DESIGN.structure, columns[layout.FORCE_MEASURED], columns[layout.SLIDING_DISPLACEMENT],
                                      columns[layout.BASE_ACCELERATION], floors)
-    assert np.allclose(record.friction_N, expected, atol=1e-6)
+    assert np.allclose(record.friction_N(), expected, atol=1e-6)
     assert Path(folder).is_dir()
