@@ -61,7 +61,7 @@ CROSSOVER_HZ = 2.0
 #: A run slid when its sliding speed exceeded this (m/s): 25 times the rig's velocity noise.
 SLIDING_SPEED_M_S = 0.005
 #: Time the motion must spend where a parameter shapes the friction for it to be determined (s).
-MIN_COVERAGE_S = 0.5
+MIN_COVERAGE_S = 0.2
 #: Largest relative standard error of a determined parameter.
 DETERMINED_RELATIVE_ERROR = 0.1
 #: Largest load-cell delay searched, either way (s).
