@@ -61,6 +61,9 @@ PURPOSE = "the structure's identification (base mat in, floors out)"
 RESOLUTION_HZ = 0.1
 #: Largest relative standard error of a determined value, by kind (the accuracy each is wanted to).
 DETERMINED_RELATIVE_ERROR = {"frequency": 0.02, "damping": 0.3, "stiffness": 0.1, "story_damping": 0.3}
+#: Largest RMS error of the modal fit relative to the floors' band-passed RMS for anything to be determined:
+#: above it the floors' motion is mostly what the base mat did not cause (sensor noise, a table at rest).
+MAX_UNEXPLAINED = 0.5
 
 
 @dataclass(frozen=True)
@@ -131,31 +134,44 @@ def start_frequencies(measured: MeasuredResponse, design: BuildingConfig, band_h
 
 def _determinations(modal: ModalFit, stories: StoryFit, band_hz: tuple[float, float]) -> tuple[tuple[Determination, ...],
                                                                                                   Determination, Determination]:
+    """Per mode, for the stiffness and for the damping: determined or not, and why.
+
+    Nothing is determined when the modes leave more than :data:`MAX_UNEXPLAINED` of the floors'
+    motion unexplained; the damping only with the stiffness it is proportional to or shapes.
+    """
+    unexplained = modal.relative_rms_error
+    explained = unexplained < MAX_UNEXPLAINED
+    why_not = "" if explained else (
+        f"; the modes leave {100 * unexplained:.0f} % of the floors' rms unexplained (at most {100 * MAX_UNEXPLAINED:g} %): "
+        "the base mat barely moved, or the floors' sensors hold mostly noise")
     modes = []
     for r, (f, f_se, z, z_se) in enumerate(zip(modal.frequency_hz, modal.frequency_se_hz, modal.damping_ratio,
                                                modal.damping_se, strict=True), start=1):
-        inside = band_hz[0] <= f <= band_hz[1]
-        f_rel, z_rel = relative_error(f, f_se), relative_error(z, z_se)
-        ok = inside and f_rel < DETERMINED_RELATIVE_ERROR["frequency"] and z_rel < DETERMINED_RELATIVE_ERROR["damping"]
+        inside = bool(band_hz[0] <= f <= band_hz[1])
+        f_rel, z_rel = relative_error(float(f), float(f_se)), relative_error(float(z), float(z_se))
+        precise = f_rel < DETERMINED_RELATIVE_ERROR["frequency"] and z_rel < DETERMINED_RELATIVE_ERROR["damping"]
+        ok = explained and inside and precise
         where = "within" if inside else "outside"
         modes.append(Determination(ok, f"mode {r}: {f:.4g} Hz {where} the band {band_hz[0]:g}-{band_hz[1]:g} Hz; standard "
-                                       f"errors {100 * f_rel:.2g} % (frequency), {100 * z_rel:.2g} % (damping)"))
-    k_rel = [relative_error(k, se) for k, se in zip(stories.stiffness_N_per_m, stories.stiffness_se, strict=True)]
-    c_rel = [relative_error(c, se) for c, se in zip(stories.damping_Ns_per_m, stories.damping_se, strict=True)]
+                                       f"errors {100 * f_rel:.2g} % (frequency), {100 * z_rel:.2g} % (damping){why_not}"))
+    k_rel = [relative_error(float(k), float(se)) for k, se in zip(stories.stiffness_N_per_m, stories.stiffness_se, strict=True)]
+    c_rel = [relative_error(float(c), float(se)) for c, se in zip(stories.damping_Ns_per_m, stories.damping_se, strict=True)]
     listed = ", ".join(f"{100 * e:.2g} %" for e in k_rel)
     limit = 100 * DETERMINED_RELATIVE_ERROR["stiffness"]
-    stiffness = Determination(max(k_rel) < DETERMINED_RELATIVE_ERROR["stiffness"],
-                              f"story stiffness standard errors {listed} (at most {limit:g} %)")
+    stiffness = Determination(explained and max(k_rel) < DETERMINED_RELATIVE_ERROR["stiffness"],
+                              f"story stiffness standard errors {listed} (at most {limit:g} %){why_not}")
     if stories.first_mode_damping_ratio is not None:
         rel = relative_error(stories.first_mode_damping_ratio, stories.first_mode_damping_se or 0.0)
-        damping = Determination(rel < DETERMINED_RELATIVE_ERROR["damping"],
-                                f"first-mode damping ratio standard error {100 * rel:.2g} % (at most "
-                                f"{100 * DETERMINED_RELATIVE_ERROR['damping']:g} %)")
+        precise = rel < DETERMINED_RELATIVE_ERROR["damping"]
+        text = (f"first-mode damping ratio standard error {100 * rel:.2g} % (at most "
+                f"{100 * DETERMINED_RELATIVE_ERROR['damping']:g} %)")
     else:
-        listed = ", ".join(f"{100 * e:.2g} %" for e in c_rel)
-        damping = Determination(max(c_rel) < DETERMINED_RELATIVE_ERROR["story_damping"],
-                                f"story damping standard errors {listed} (at most "
-                                f"{100 * DETERMINED_RELATIVE_ERROR['story_damping']:g} %)")
+        precise = max(c_rel) < DETERMINED_RELATIVE_ERROR["story_damping"]
+        text = (f"story damping standard errors {', '.join(f'{100 * e:.2g} %' for e in c_rel)} (at most "
+                f"{100 * DETERMINED_RELATIVE_ERROR['story_damping']:g} %)")
+    if not stiffness.determined:
+        text += "; and the stiffness it goes with is not determined"
+    damping = Determination(stiffness.determined and precise, text + why_not)
     return tuple(modes), stiffness, damping
 
 

@@ -57,3 +57,17 @@ def test_a_bad_band_is_refused_by_the_option_parser(tmp_path, capsys):
     status = main(["identify", "structure", str(tmp_path), "--out", str(tmp_path / "ident"), "--band-hz", "20,1"])
     assert status == exit_codes.INPUT_ERROR
     assert "LOW < HIGH" in capsys.readouterr().err
+
+
+def test_a_run_whose_base_mat_never_moved_determines_nothing_and_is_refused(tmp_path, capsys):
+    from harness.model.plant import TableMotion
+
+    still = measured(simulate(DESIGN.structure, DESIGN.bearing, TableMotion.at_rest(10.0, 0.01)), DESIGN)
+    folder = write_run(tmp_path, "at_rest", still, DESIGN)  # only the sensors' noise in the floors
+    out = tmp_path / "ident"
+    status = main(["identify", "structure", str(folder), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert status == exit_codes.INPUT_ERROR
+    assert "determine neither the story stiffness nor the damping" in captured.err and "unexplained" in captured.err
+    assert captured.out.count("(not determined)") == 3
+    assert "nothing determined" in (out / "identified.yaml").read_text()  # no value from noise
