@@ -9,7 +9,8 @@ allow it). A user keeps them in a records directory, chosen in this order:
 
 Short names map to the normalized file names of the shared data set; a file's stem
 or name, or any path to a file, works too. ``synthetic`` (or ``synthetic:SEED``)
-needs no file: it is generated (:mod:`harness.motions.synthetic`).
+needs no file: it is generated (:mod:`harness.motions.synthetic`); nor does
+``white_noise:LOW-HIGH[:PGA]``, band-limited white noise (:mod:`harness.motions.white_noise`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from pathlib import Path
 
 from harness.config.input_limits import MAX_SEED
 from harness.errors import RecordError
+from harness.motions.white_noise import WHITE_NOISE, white_noise_spec
 
 #: Environment variable that names the records directory.
 ENV_RECORDS_DIR = "HARNESS_RECORDS_DIR"
@@ -171,6 +173,8 @@ def resolve_record(name_or_path: str, records_dir: str | Path | None) -> Path:
     """
     if synthetic_seed(name_or_path) is not None:
         raise RecordError(f"{name_or_path!r} is generated, not read from a file; use synthetic_record()")
+    if white_noise_spec(name_or_path) is not None:
+        raise RecordError(f"{name_or_path!r} is generated, not read from a file; use white_noise_record()")
     given = Path(name_or_path).expanduser()
     if given.is_file():
         return given
@@ -197,7 +201,7 @@ def _help_text() -> str:
     known = ", ".join(CATALOG)
     sources = "; ".join(f"{entry.name}: {entry.source}" for entry in CATALOG.values())
     return (
-        f"Known names: {known}, {SYNTHETIC} (or {SYNTHETIC}:SEED). "
+        f"Known names: {known}, {SYNTHETIC} (or {SYNTHETIC}:SEED), {WHITE_NOISE}:LOW-HIGH[:PGA]. "
         f"The real records are not shipped with the harness; get them from {sources}. "
         f"'{SYNTHETIC}' always works: it is generated, no file needed."
     )
@@ -234,4 +238,7 @@ def list_records(records_dir: str | Path | None) -> list[RecordListing]:
             if path.is_file() and path.suffix.lower() in RECORD_SUFFIXES and path.name not in claimed:
                 listing.append(RecordListing(path.stem, path, True, "a record file that is not in the catalog"))
     listing.append(RecordListing(SYNTHETIC, None, True, "Clough-Penzien filtered white noise, seeded (synthetic:SEED)"))
+    listing.append(RecordListing(
+        WHITE_NOISE, None, True, "band-limited white table acceleration for identification (white_noise:0.5-20[:PGA_G])",
+    ))
     return listing

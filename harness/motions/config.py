@@ -9,6 +9,7 @@ directory, passed as ``base_dir``.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -35,6 +36,7 @@ from harness.motions.checks import MIN_SAMPLES
 from harness.motions.loaders import RawRecord, load_record
 from harness.motions.processing import GroundMotion, process_record
 from harness.motions.synthetic import synthetic_record
+from harness.motions.white_noise import WhiteNoiseSpec, white_noise_record, white_noise_spec
 
 #: Length of a run when neither the profile nor the CLI gives one (s, processed time).
 DEFAULT_SYNTHETIC_DURATION_S = 30.0
@@ -48,7 +50,9 @@ DEFAULT_SYNTHETIC_PGA_G = 0.3
 class RecordConfig:
     """Profile section ``record:``: which ground motion, and how to scale it."""
 
-    name: str = quantity("synthetic", doc="catalog name, file name or path, or synthetic / synthetic:SEED")
+    name: str = quantity(
+        "synthetic", doc="catalog name, file name or path, synthetic / synthetic:SEED, or white_noise:LOW-HIGH[:PGA]"
+    )
     records_dir: str | None = quantity(None, doc="directory of the real records (relative to the profile)")
     # Bounds shared with the command line; harness/config/input_limits.py gives the reasons.
     pga_g: float | None = quantity(
@@ -66,6 +70,10 @@ class RecordConfig:
     def __post_init__(self) -> None:
         if not self.name.strip():
             raise ValueError("name: expected a record name, found an empty string")
+        try:
+            white_noise_spec(self.name)
+        except RecordError as err:
+            raise ValueError(f"name: {err}") from err
         if self.accel_unit is not None:
             try:
                 normalize_accel_unit(self.accel_unit)
@@ -81,8 +89,9 @@ def load_raw(
     seed: int = 0,
     synthetic_duration_s: float = DEFAULT_SYNTHETIC_DURATION_S,
     synthetic_pga_g: float = DEFAULT_SYNTHETIC_PGA_G,
+    time_scale: float = 1.0,
 ) -> RawRecord:
-    """Load a record by catalog name, file name or path, or generate ``synthetic[:SEED]``.
+    """Load a record by catalog name, file name or path, or generate ``synthetic[:SEED]`` or ``white_noise:...``.
 
     Parameters
     ----------
@@ -96,8 +105,15 @@ def load_raw(
     seed : int
         Seed for plain ``synthetic``.
     synthetic_duration_s, synthetic_pga_g : float
-        Length (s, before compression) and PGA (g) of a generated record.
+        Length (s, before compression) and PGA (g) of a generated record; white noise takes
+        its PGA from its name.
+    time_scale : float
+        The time compression the record will get: white noise is generated so that it plays
+        its band after it (:mod:`harness.motions.white_noise`).
     """
+    spec = white_noise_spec(name_or_path)
+    if spec is not None:
+        return white_noise_record(spec, seed=seed, duration_s=synthetic_duration_s / time_scale, time_scale=time_scale)
     named_seed = synthetic_seed(name_or_path)
     if named_seed is not None:
         chosen = seed if name_or_path.strip() == "synthetic" else named_seed
@@ -164,8 +180,11 @@ def load_raw_and_motion(
     duration = duration_s if duration_s is not None else config.duration_s
     target = pga_g if pga_g is not None else config.pga_g
     records_dir = records_dir_from(records_dir_flag, config.records_dir, env, base_dir=base_dir)
+    spec = white_noise_spec(chosen_name)
     if synthetic_seed(chosen_name) is not None:  # its time step is known before it is made
         _check_duration(duration, SYNTHETIC_DT_S, scale, chosen_name)
+    if spec is not None:
+        _check_duration(duration, spec.step_s * scale, scale, chosen_name)
     raw = load_raw(
         chosen_name,
         records_dir,
@@ -173,15 +192,31 @@ def load_raw_and_motion(
         seed=config.seed,
         synthetic_duration_s=(duration or DEFAULT_SYNTHETIC_DURATION_S) * scale,
         synthetic_pga_g=target or DEFAULT_SYNTHETIC_PGA_G,
+        time_scale=scale,
     )
     _check_duration(duration, raw.dt_s, scale, chosen_name)
-    motion = process_record(raw, pga_g=target, time_scale=scale, duration_s=duration)
+    if spec is not None:
+        motion = _white_noise_motion(raw, spec, target, scale, duration)
+    else:
+        motion = process_record(raw, pga_g=target, time_scale=scale, duration_s=duration)
     if motion.duration_s > MAX_DURATION_S:
         raise RecordError(
             f"record {motion.name!r} runs {motion.duration_s:g} s after a time scale of {scale:g}, expected at most "
             f"{MAX_DURATION_S:g} s (what a run or a simulation may allocate); cut it with --duration or record.duration_s"
         )
     return raw, motion
+
+
+def _white_noise_motion(
+    raw: RawRecord, spec: WhiteNoiseSpec, pga_g: float | None, time_scale: float, duration_s: float | None,
+) -> GroundMotion:
+    """White noise processed at the amplitude of its name, with a note where ``record.pga_g`` asked for another."""
+    motion = process_record(raw, pga_g=spec.pga_g, time_scale=time_scale, duration_s=duration_s)
+    notes = [f"white noise {spec.low_hz:g}-{spec.high_hz:g} Hz as the table plays it, at the {spec.pga_g:g} g its name gives"]
+    if pga_g is not None and abs(pga_g - spec.pga_g) > 1e-9 * spec.pga_g:
+        notes.append(f"record.pga_g (or --pga) of {pga_g:g} g does not apply to white noise: give the amplitude in its name, "
+                     f"e.g. {WhiteNoiseSpec(spec.low_hz, spec.high_hz, pga_g).name}")
+    return dataclasses.replace(motion, notes=(*motion.notes, *notes))
 
 
 def _check_duration(duration_s: float | None, raw_dt_s: float, time_scale: float, name: str) -> None:

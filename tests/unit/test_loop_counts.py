@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.signals import columns as layout
 from harness.loop.config import LoopConfig
 from harness.loop.runner import ControlLoop
 from harness.loop.status import LoopStatus
+from harness.signals import columns as layout
 from tests.unit.test_control_tick import PERIOD_S, Bench
 
 #: Arm, settle 20 ms, 0.2 s of record, no tail.

@@ -105,7 +105,7 @@ def test_list_records_reports_availability_extra_files_and_synthetic(tmp_path):
 
 def test_list_records_without_a_directory():
     listing = list_records(None)
-    assert [e.name for e in listing if e.available] == ["synthetic"]
+    assert [e.name for e in listing if e.available] == ["synthetic", "white_noise"]  # the generated ones
 
 
 # --- records directory precedence ----------------------------------------------------------------
