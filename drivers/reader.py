@@ -30,7 +30,7 @@ from collections.abc import Callable, Sequence
 import can
 
 from drivers.bus import BusHealth
-from drivers.codec import Protocol
+from drivers.codec import MessageCodec, Protocol
 from drivers.decoder import Decoder, RxStatus
 from drivers.errors import BusError, ProtocolError
 from drivers.measurements import Measurements
@@ -63,6 +63,25 @@ def damaged_estop(status: RxStatus) -> bool:
     ``OK``, a bad counter or an out-of-range value left the frame readable.
     """
     return status in _UNREADABLE
+
+
+def estop_frame_active(
+    status: RxStatus, data: bytes | bytearray, accepted: Sequence[float], codec: MessageCodec, scratch: list[float],
+    active_index: int,
+) -> bool:
+    """Whether a frame on the E-stop ID asks for a stop, judged fail-safe (both readers call this).
+
+    ``accepted`` holds the values the decoder took from an ``OK`` frame. A frame too damaged to
+    read (:func:`damaged_estop`) asks for a stop. An intact one the decoder refused (a repeated or
+    skipped counter, a value out of range) is read again into ``scratch`` through ``codec`` and
+    asks what it says: an active stop request out of sequence is still a stop request.
+    """
+    if status == RxStatus.OK:
+        return accepted[active_index] != 0.0
+    if damaged_estop(status):
+        return True
+    codec.unpack(data, scratch)  # CRC and length are fine here
+    return scratch[active_index] != 0.0
 
 
 class Sample:
@@ -357,19 +376,12 @@ class FrameReader:
     def _note_estop(self, status: RxStatus, data: bytearray, t: float) -> None:
         self.counters.estop_frames += 1
         self.counters.last_estop_time = t
-        if status == RxStatus.OK:
-            values = self._samples[self._estop_id].values
-            active = values[self._estop_active]
-            if values[self._estop_source] == PANEL_SOURCE:
-                self.counters.panel_frames += 1
-                self.counters.last_panel_time = t
-        elif damaged_estop(status):
-            active = 1.0
-        else:  # intact, but out of sequence or out of range: what does it ask for?
-            codec = self.protocol.by_id[self._estop_id]
-            codec.unpack(data, self._estop_scratch)  # CRC and length are fine here
-            active = self._estop_scratch[self._estop_active]
-        if active:
+        values = self._samples[self._estop_id].values
+        if status == RxStatus.OK and values[self._estop_source] == PANEL_SOURCE:
+            self.counters.panel_frames += 1
+            self.counters.last_panel_time = t
+        codec = self.protocol.by_id[self._estop_id]
+        if estop_frame_active(status, data, values, codec, self._estop_scratch, self._estop_active):
             self.estop_requested = True
 
 

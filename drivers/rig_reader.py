@@ -5,9 +5,10 @@ message, which is right for a control loop but loses events for the rig: in lock
 ACTUATOR_CMD frame is a step, and two RIG_CONTROL frames in one poll are two commands.
 :class:`RigReader` therefore takes frames off the bus one by one (blocking up to a timeout
 when asked, so the lockstep thread does not spin) and checks and decodes each with the
-:class:`~drivers.decoder.Decoder` (same E2E checks and counts). A frame on the E-stop ID too
-damaged to read counts as a stop request, by the same rule as the harness's reader
-(:func:`drivers.reader.damaged_estop`).
+:class:`~drivers.decoder.Decoder` (same E2E checks and counts). A frame on the E-stop ID
+asks for a stop by the same fail-safe rule as the harness's reader
+(:func:`drivers.reader.estop_frame_active`): too damaged to read, or intact and active even
+with a repeated or skipped counter.
 
 The rig outlives the harness: it serves run after run, each from a new harness process
 whose rolling counters start again at 0. A message silent for longer than
@@ -28,7 +29,7 @@ import can
 from drivers.codec import Protocol
 from drivers.decoder import Decoder, RxStatus
 from drivers.errors import BusError
-from drivers.reader import RIG_RX, damaged_estop
+from drivers.reader import RIG_RX, estop_frame_active
 
 #: A message silent this long (s) comes from a new sender: its counter history is forgotten.
 NEW_SENDER_SILENCE_S = 0.5
@@ -72,6 +73,8 @@ class RigReader:
         }
         self._estop_id = protocol["ESTOP"].frame_id
         self._estop_active = protocol["ESTOP"].index("active")
+        self._estop_codec = protocol["ESTOP"]
+        self._estop_scratch = [0.0] * len(self._estop_codec.signal_names)
         self.frames = 0
         self._last_heard = dict.fromkeys(self._kinds, -float("inf"))
 
@@ -82,7 +85,7 @@ class RigReader:
         -------
         int
             NOTHING (no frame), COMMAND, HEARTBEAT, CONTROL, DRIVE_RESET (values updated), ESTOP
-            (a valid active stop or a damaged frame on the E-stop ID), REJECTED
+            (an active stop, even out of sequence, or a damaged frame on the E-stop ID), REJECTED
             (failed a check, counted by the decoder) or OTHER (an inactive E-stop,
             an error frame, a foreign ID).
 
@@ -111,9 +114,9 @@ class RigReader:
         )
         kind = OTHER if msg.is_extended_id else self._kinds.get(msg.arbitration_id, OTHER)
         if kind == ESTOP:
-            if status == RxStatus.OK:
-                return ESTOP if self.estop[self._estop_active] else OTHER
-            return ESTOP if damaged_estop(status) else REJECTED
+            if estop_frame_active(status, msg.data, self.estop, self._estop_codec, self._estop_scratch, self._estop_active):
+                return ESTOP  # fail-safe: an active stop out of sequence, or a frame too damaged to read
+            return OTHER if status == RxStatus.OK else REJECTED
         if status != RxStatus.OK:
             return REJECTED if kind != OTHER else OTHER
         return kind

@@ -246,6 +246,21 @@ def test_both_sides_take_an_unreadable_estop_frame_for_a_stop_request(damage: st
     assert rig.receive() == rig_reader.ESTOP
 
 
+@pytest.mark.parametrize("counter", [0, 5])  # repeated, skipped
+def test_both_sides_take_an_active_estop_out_of_sequence_for_a_stop_request(counter: int) -> None:
+    release = frame("ESTOP", [0.0, 0.0, 0.0], 0)
+    late_stop = frame("ESTOP", [1.0, 1.0, 0.0], counter)  # intact, active, its counter refused
+    late_release = frame("ESTOP", [0.0, 0.0, 0.0], counter)
+    harness = harness_reader(FakeBus([release, late_stop]))
+    harness.poll(1.0)
+    assert harness.estop_requested
+    rig = RigReader(FakeBus([release, late_stop, release, late_release]), PROTOCOL)  # type: ignore[arg-type]
+    assert rig.receive() == rig_reader.OTHER
+    assert rig.receive() == rig_reader.ESTOP, "an active stop out of sequence is still a stop on the rig too"
+    rig.receive()
+    assert rig.receive() == rig_reader.REJECTED, "a release out of sequence is refused, and no stop"
+
+
 def test_only_a_frame_that_cannot_be_read_is_a_damaged_estop() -> None:
     unreadable = {status for status in RxStatus if damaged_estop(status)}
     assert unreadable == {RxStatus.NOT_DATA, RxStatus.WRONG_LENGTH, RxStatus.BAD_CRC}
