@@ -28,6 +28,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import functools
+import hashlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -72,8 +73,10 @@ class Profile:
     variants: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     source_path: str = internal("", "the file this profile was loaded from")
     variant: str = internal("", "the variant applied, if any")
+    overlay_path: str = internal("", "the overlay file merged over the profile (--overlay), if any")
+    overlay_sha256: str = internal("", "the SHA-256 of that file's bytes")
     safety_weakened: tuple[Weakening, ...] = internal(
-        (), "safety settings --set made weaker than the profile's own (harness/safety/weakening.py)"
+        (), "safety settings --overlay or --set made weaker than the profile's own (harness/safety/weakening.py)"
     )
 
     def __post_init__(self) -> None:
@@ -130,7 +133,13 @@ class Profile:
         data["loaded_from"] = self.source_path
         if self.variant:
             data["variant"] = self.variant
+        if self.overlay_path:
+            data["overlay"] = self.overlay_record()
         return data
+
+    def overlay_record(self) -> dict[str, str] | None:
+        """The overlay for metadata.json: its file and SHA-256 (None without one)."""
+        return {"path": self.overlay_path, "sha256": self.overlay_sha256} if self.overlay_path else None
 
     @classmethod
     def from_resolved(cls, data: Mapping[str, Any]) -> Profile:
@@ -142,8 +151,10 @@ class Profile:
         data = dict(data)
         source = str(data.pop("loaded_from", ""))
         variant = str(data.pop("variant", ""))
+        overlay = data.pop("overlay", None) or {}
         profile = _build_checked(data, f"{source} (resolved)")
-        return dataclasses.replace(profile, source_path=source, variant=variant)
+        return dataclasses.replace(profile, source_path=source, variant=variant,
+                                   overlay_path=str(overlay.get("path", "")), overlay_sha256=str(overlay.get("sha256", "")))
 
 
 def _read_yaml(path: Path) -> dict:
@@ -270,7 +281,8 @@ def _overlaps(a: tuple[str, ...], b: tuple[str, ...]) -> bool:
 
 
 def load_profile(
-    path: str | Path | None = None, variant: str | None = None, overrides: list[str] | tuple[str, ...] = ()
+    path: str | Path | None = None, variant: str | None = None, overrides: list[str] | tuple[str, ...] = (),
+    overlay: str | Path | None = None,
 ) -> Profile:
     """Load, merge and validate a profile.
 
@@ -281,14 +293,19 @@ def load_profile(
     variant : str, optional
         Name of an entry of ``variants`` to apply.
     overrides : sequence of str
-        ``KEY.PATH=VALUE`` items applied last, over the variant too (the command line's ``--set``);
-        validated like the file.
+        ``KEY.PATH=VALUE`` items applied last, over the variant and the overlay too (the command
+        line's ``--set``); validated like the file.
+    overlay : str or Path, optional
+        A YAML file with the same keys as a profile (e.g. the ``identified.yaml`` of ``harness
+        identify``), merged over the profile after the variant and before ``overrides`` (the
+        command line's ``--overlay``); validated like the file.
 
     Returns
     -------
     Profile
-        With ``safety_weakened``: the safety settings the overrides made weaker than the
-        profile's own values (file, extends and variant), for the caller to refuse or record.
+        With ``safety_weakened``: the safety settings the overlay and the overrides made weaker
+        than the profile's own values (file, extends and variant), for the caller to refuse or
+        record; and the overlay's path and SHA-256.
 
     Raises
     ------
@@ -301,19 +318,33 @@ def load_profile(
     file = Path(path) if path is not None else DEFAULT_PROFILE
     source = str(file)
     data = _resolve_extends(file)
-    own = _own_safety(data, variant, source) if overrides else None
-    changes = parse_overrides(overrides) if overrides else {}
+    layer, overlay_sha256 = _read_overlay(Path(overlay)) if overlay is not None else ({}, "")
+    on_top = merge(layer, parse_overrides(overrides)) if overrides else layer
+    own = _own_safety(data, variant, source) if on_top else None
+    if overlay is not None:
+        source = f"{source} (with --overlay {overlay})"
     if overrides:
-        data = merge(data, changes)
         source = f"{source} (with --set {' '.join(overrides)})"
-    profile = _build_checked(data, source)
+    profile = _build_checked(merge(data, on_top), source)
     for name in profile.variants:  # every variant must give a valid profile
         if name != variant:
-            _build_checked(merge(_apply_variant(data, name, source), changes), f"{source} (variant {name})")
-    if variant:  # --set goes last, over the variant too
-        profile = _build_checked(merge(_apply_variant(data, variant, source), changes), f"{source} (variant {variant})")
+            _build_checked(merge(_apply_variant(data, name, source), on_top), f"{source} (variant {name})")
+    if variant:  # the overlay and --set go over the variant
+        profile = _build_checked(merge(_apply_variant(data, variant, source), on_top), f"{source} (variant {variant})")
     weakened = weakenings(own, profile.safety) if own is not None else ()
-    return dataclasses.replace(profile, source_path=str(file.resolve()), variant=variant or "", safety_weakened=weakened)
+    return dataclasses.replace(
+        profile, source_path=str(file.resolve()), variant=variant or "", safety_weakened=weakened,
+        overlay_path=str(Path(overlay).resolve()) if overlay is not None else "", overlay_sha256=overlay_sha256,
+    )
+
+
+def _read_overlay(path: Path) -> tuple[dict, str]:
+    """An overlay's keys and the SHA-256 of its bytes; refuses what only a profile may hold."""
+    data = _read_yaml(path)
+    for key in ("extends", "variants"):
+        if key in data:
+            raise ProfileError(f"an overlay holds values only; expected no {key!r} (put it in the profile)", str(path), key)
+    return data, hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def _own_safety(data: dict, variant: str | None, source: str) -> SafetyConfig:

@@ -236,8 +236,13 @@ def add_bus_options(parser: argparse.ArgumentParser) -> None:
 
 
 def add_overrides(parser: argparse.ArgumentParser, example: str) -> None:
-    """``--variant`` and ``--set``: every command that loads a profile takes both, validated like the file."""
+    """``--variant``, ``--overlay`` and ``--set``: every command that loads a profile takes them, validated like the file."""
     parser.add_argument("--variant", type=non_empty, help="apply a named variant of the profile (e.g. a_mu_0.5)")
+    parser.add_argument(
+        "--overlay", type=non_empty, metavar="FILE",
+        help="merge a YAML file with the profile's keys over it, after --variant and before --set (e.g. the "
+        "identified.yaml of `harness identify`); validated like the profile, recorded with its SHA-256 in metadata.json",
+    )
     parser.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
         help=f"override a profile value, validated like the file, e.g. --set {example} (repeatable)",
@@ -409,7 +414,7 @@ def load_acknowledged(args: argparse.Namespace, console: Console | None = None):
     Parameters
     ----------
     args : argparse.Namespace
-        With ``profile``, ``variant``, ``overrides`` and ``allow_weaker_safety``.
+        With ``profile``, ``variant``, ``overlay``, ``overrides`` and ``allow_weaker_safety``.
     console : Console, optional
         Where an accepted weakening is announced (in red) before anything starts.
 
@@ -421,7 +426,7 @@ def load_acknowledged(args: argparse.Namespace, console: Console | None = None):
     from harness.profile import load_profile
     from harness.safety.weakening import require_acknowledged, summary
 
-    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides, overlay=args.overlay)
     require_acknowledged(profile.safety_weakened, args.allow_weaker_safety, profile.source_path)
     if profile.safety_weakened and console is not None:
         console.print(f"[bold red]{escape(summary(profile.safety_weakened))}[/]", highlight=False)

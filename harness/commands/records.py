@@ -73,7 +73,7 @@ def _plot_file(text: str) -> str:
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.profile import load_profile
 
-    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides, overlay=args.overlay)
     if args.record is None:
         return list_command(args, console, profile)
     return show_command(args, console, profile)

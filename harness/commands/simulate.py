@@ -97,7 +97,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.runs.simulate_batch import split_list
 
     console = json_console(console, args.json)
-    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides)
+    profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides, overlay=args.overlay)
     check_run_length(profile, args)
     records, controllers = split_list(args.record), split_list(args.controller)
     if len(records) > 1 or len(controllers) > 1:

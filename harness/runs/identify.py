@@ -203,6 +203,7 @@ def _write_excitation_record(out_dir: Path, profile: Profile, options: IdentifyO
     write_json_atomic(path, {
         "command": "identify actuator",
         "profile": profile.name, "profile_file": profile.source_path, "variant": profile.variant or None,
+        "overlay": profile.overlay_record(),
         "excitation": options.excitation.as_dict(),
         "rate_hz": profile.control.rate_hz,
         "rig": "external (--interface/--channel)" if options.external_rig else "virtual",

@@ -135,6 +135,7 @@ def _metadata(profile: Profile, settings: SessionSettings) -> dict:
         "estop_panel_required": profile.safety.estop.panel_required,
         "trip_actions": {group: list(getattr(profile.safety.trip_actions, group)) for group in TRIP_CLASSES},
         "safety_weakened": [item.as_dict() for item in profile.safety_weakened],
+        "overlay": profile.overlay_record(),
         **settings.metadata,
     }
 

@@ -46,6 +46,7 @@ def case_metadata(result: Any, name: str, summary: Mapping[str, Any], label: str
         "controller": "none" if name == "passive" else result.controller_name,
         "sampling": summary["sampling"],
         "variant": profile.variant or None,
+        "overlay": profile.overlay_record(),
         "overrides": list(overrides),
         "total_weight_N": profile.structure.total_weight_N,
         "peaks": case.peaks.as_json(),

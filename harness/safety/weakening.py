@@ -216,7 +216,7 @@ def require_acknowledged(weakened: tuple[Weakening, ...], allowed: bool, source:
     if weakened and not allowed:
         listed = "; ".join(item.describe() for item in weakened)
         raise ProfileError(
-            f"--set weakens the profile's safety settings (profile's value -> new value): {listed}; expected the "
+            f"--overlay/--set weaken the profile's safety settings (profile's value -> new value): {listed}; expected the "
             f"profile's values or stricter ones, or {FLAG} to run with them anyway (recorded in metadata.json)",
             source,
         )

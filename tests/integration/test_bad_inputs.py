@@ -218,6 +218,15 @@ BAD_ARGUMENTS = {
     "duration_1e_9": (["dry-run", "--duration", "1e-9"], ["--duration", "found 1e-09 s", "expected at least 0.02 s"]),
     "simulate_duration_1e_9": (["simulate", "--duration", "1e-9"], ["--duration", "found 1e-09 s", "expected at least 0.02 s"]),
     "run_duration_1e_9": (["run", "--duration", "1e-9", "--yes"], ["--duration", "found 1e-09 s"]),
+    # --- issue 23: --overlay ---
+    "missing_overlay": (["simulate", "--overlay", "{tmp}/missing_overlay.yaml"],
+                        ["missing_overlay.yaml", "not found", "expected an existing YAML file"]),
+    "overlay_unknown_key": (["dry-run", "--overlay", "{tmp}/typo_overlay.yaml"],
+                            ["typo_overlay.yaml", "bearing.mu_maxx", "unknown key 'mu_maxx'"]),
+    "overlay_with_extends": (["simulate", "--overlay", "{tmp}/extends_overlay.yaml"],
+                             ["extends_overlay.yaml", "an overlay holds values only", "expected no 'extends'"]),
+    "overlay_weakens_safety": (["dry-run", "--overlay", "{tmp}/weak_overlay.yaml"],
+                               ["safety.comms.error_frame_action safe_stop -> indicate", "--allow-weaker-safety"]),
     "duration_below_ten_record_samples": (
         ["simulate", "--duration", "0.03"], ["--duration", "0.03 s", "expected at least 0.05 s", "10 samples of the record"],
     ),
@@ -243,6 +252,9 @@ def _run_folder(parent: Path, name: str, rows: int = 40) -> Path:
 def inputs(tmp_path_factory) -> Path:
     tmp = tmp_path_factory.mktemp("bad_inputs")
     (tmp / "folder").mkdir()
+    (tmp / "typo_overlay.yaml").write_text("bearing:\n  mu_maxx: 0.1\n")
+    (tmp / "extends_overlay.yaml").write_text("extends: nceer_4dof.yaml\nbearing:\n  mu_max: 0.1\n")
+    (tmp / "weak_overlay.yaml").write_text("safety:\n  comms:\n    error_frame_action: indicate\n")
     (tmp / "file.txt").write_text("not a folder\n")
     (tmp / "binary.dbc").write_bytes(b"\x7fELF\x02\x01\x01\x00\x1b[31m" + bytes(range(256)) * 4)
     (tmp / "no_unit.csv").write_text("t,acc\n" + "".join(f"{i * 0.01:.2f},0.01\n" for i in range(50)))

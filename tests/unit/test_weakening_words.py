@@ -36,7 +36,7 @@ def test_an_unacknowledged_weakening_is_refused_naming_the_file_and_every_key() 
     listed = "; ".join(w.describe() for w in weakened)
     assert refused.value.source == "profiles/lab.yaml"
     assert str(refused.value) == (
-        f"profiles/lab.yaml: --set weakens the profile's safety settings (profile's value -> new value): {listed}; "
+        f"profiles/lab.yaml: --overlay/--set weaken the profile's safety settings (profile's value -> new value): {listed}; "
         f"expected the profile's values or stricter ones, or {FLAG} to run with them anyway (recorded in metadata.json)"
     )
     assert " -> " in listed and listed.count("; ") == 1
