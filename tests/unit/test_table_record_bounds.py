@@ -144,6 +144,8 @@ def test_a_table_later_than_the_search_is_a_mismatch_at_the_edge() -> None:
     check = _played(told, late)
     assert check.worst is TableVerdict.MISMATCH and check.worst_measures[3] is True
     assert "no correlation peak within" in why(*check.worst_measures)
+    correlation, delay_s, ratio, _ = check.worst_measures
+    assert f"delay {delay_s * 1e3:+.1f} ms" in check.measures_text() and abs(delay_s) == pytest.approx(MAX_LAG_S)
 
 
 def test_the_first_evaluation_is_judged_at_the_gate_to_the_tick() -> None:
