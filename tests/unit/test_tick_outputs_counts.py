@@ -82,3 +82,51 @@ def test_reset_counter_forgets_one_messages_counter_only() -> None:
     assert decoder.decode(table.frame_id, table.encode(zeros, 9)) is RxStatus.OK, "forgotten: any counter is first"
     assert decoder.decode(base.frame_id, base.encode(zeros, 9)) is RxStatus.SKIPPED_COUNTER, "the other message kept its"
     decoder.reset_counter(0x7FF)  # an ID the protocol does not have: nothing to forget, no error
+
+
+def _internal_stops_the_table():
+    import dataclasses
+
+    from harness.safety.config import TripActionsConfig
+    from tests.unit.test_trip_actions import SAFETY
+
+    return dataclasses.replace(SAFETY, trip_actions=TripActionsConfig(internal=("disable", "estop", "stop_table")))
+
+
+def test_the_tick_hands_its_table_stop_on_and_stops_the_table_only_when_a_trip_asks() -> None:
+    from harness.loop.tick import ControlTick
+
+    b = Bench(_internal_stops_the_table())
+    try:
+        stops: list[float] = []
+        b.tick = ControlTick(b.link, b.controller, b.tick.estimator, b.supervisor, None, heartbeat_every=1,
+                             stop_table=stops.append)
+        b.run_until_running()
+        assert stops == [], "no check asked: the table plays on"
+        b.controller.raise_next = True
+        t = b.t
+        b.step()
+        assert stops == [t], "the trip tick stops the table, stamped with the tick's clock"
+    finally:
+        b.close()
+
+
+def test_a_command_that_cannot_be_sent_trips_at_the_ticks_time_naming_why(bench) -> None:
+    from harness.signals import columns as layout
+
+    bench.run_until_running()
+    enabled = layout.CONTROL_ROW.index(layout.DRIVE_ENABLED)
+    assert bench.tick.row[enabled] == 1.0, "the recorded row says the drive is enabled"
+
+    def refuse(*args) -> bool:
+        raise OSError("ENOBUFS")
+
+    bench.tick.writer.command = refuse
+    bench.publish()
+    t = bench.t
+    command = bench.tick.run(t, 0.002, t)
+    assert command.state is State.TRIPPED and bench.supervisor.lifecycle.trip_reason == "tick_exception"
+    assert bench.supervisor.lifecycle.trip_detail == "OSError: ENOBUFS"
+    assert bench.supervisor.lifecycle.entered_s == pytest.approx(t)
+    assert bench.tick.disable_failures == 1, "the disable that followed could not be sent either: counted"
+    assert bench.tick.row[enabled] == 0.0
