@@ -112,7 +112,7 @@ def print_timing(console: Console, timing: dict, rate_hz: float) -> None:
         f"loop at {rate_hz:g} Hz: {timing['ticks']} ticks, lateness median {timing['lateness_median_s'] * 1e6:.1f} us, "
         f"p99 {timing['lateness_p99_s'] * 1e6:.1f} us, max {timing['lateness_max_s'] * 1e6:.0f} us; compute median "
         f"{timing['compute_median_s'] * 1e6:.1f} us, p99 {timing['compute_p99_s'] * 1e6:.1f} us (CPU of the loop thread: median "
-        f"{timing['cpu_median_s'] * 1e6:.1f} us); missed periods {timing['overruns']}"
+        f"{timing['cpu_median_s'] * 1e6:.1f} us); deadlines skipped {timing['overruns']}"
     )
     if "stall_budget_s" in timing and not timing.get("lockstep", False):
         console.print(

@@ -139,7 +139,7 @@ def timing_table(runs: Sequence[RunData]) -> TextTable | None:
         ("Compute p99.9 (us)", _micro("compute_p999_s")),
         ("Compute max (us)", _micro("compute_max_s")),
         ("CPU of the loop thread p50 (us)", _micro("cpu_median_s")),
-        ("Missed periods", lambda run: _format(_timing(run).get("overruns"))),
+        ("Deadlines skipped", lambda run: _format(_timing(run).get("overruns"))),
         ("Stalls ridden through", lambda run: _format(_timing(run).get("stalls_ridden_through"))),
         ("Longest stall (ms)", lambda run: _format(_timing(run).get("longest_stall_s"), 1e3, 1)),
         ("Stall budget (ms)", lambda run: _format(_timing(run).get("stall_budget_s"), 1e3, 1)),

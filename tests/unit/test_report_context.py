@@ -122,7 +122,7 @@ def test_console_and_report_agree_on_compute_p99(report) -> None:
     (timing,) = [t for t in result.context if t.title == "Loop timing"]
     cells = {row[0]: row[1] for row in timing.rows}
     assert cells["Compute p99 (us)"] == f"{TIMING['compute_p99_s'] * 1e6:.1f}" == "505.0"  # what print_timing shows
-    assert cells["Missed periods"] == "0" and cells["Pre-flight check"] == "ok"
+    assert cells["Deadlines skipped"] == "0" and cells["Pre-flight check"] == "ok"
 
 
 def test_target_against_achieved_names_the_peaks_and_the_tracking_error(report) -> None:
