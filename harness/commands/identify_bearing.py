@@ -7,7 +7,7 @@ import argparse
 from rich.console import Console
 
 from harness import exit_codes
-from harness.commands.options import OFFLINE_EXIT_STATUS, number_in, output_dir, wrap
+from harness.commands.options import OFFLINE_EXIT_STATUS, add_run_folders, number_in, wrap
 from harness.config import input_limits as limits
 
 #: Corner of the low-pass on the measured and fitted force (Hz).
@@ -45,9 +45,7 @@ def add_parser(sub) -> None:
         epilog=EXAMPLES + "\n" + OFFLINE_EXIT_STATUS,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("runs", nargs="+", metavar="RUN", help="run folders (each holding metadata.json)")
-    parser.add_argument("--out", required=True, type=output_dir, metavar="DIR",
-                        help="where identified.yaml, identification.json and friction.png go (created if missing)")
+    add_run_folders(parser, "identified.yaml, identification.json and friction.png")
     parser.add_argument("--lowpass-hz", type=number_in(LOWPASS), default=LOWPASS_HZ, metavar="HZ",
                         help=f"low-pass corner applied to measured and fitted force alike, {LOWPASS.describe()} "
                         f"(default: {LOWPASS_HZ:g})")

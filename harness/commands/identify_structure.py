@@ -8,7 +8,7 @@ from rich.console import Console
 
 from harness import exit_codes
 from harness.commands.identify_actuator import band
-from harness.commands.options import OFFLINE_EXIT_STATUS, output_dir, wrap
+from harness.commands.options import OFFLINE_EXIT_STATUS, add_run_folders, wrap
 
 EXAMPLES = """\
 examples:
@@ -42,9 +42,7 @@ def add_parser(sub) -> None:
         epilog=EXAMPLES + "\n" + OFFLINE_EXIT_STATUS,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("runs", nargs="+", metavar="RUN", help="run folders (each holding metadata.json)")
-    parser.add_argument("--out", required=True, type=output_dir, metavar="DIR",
-                        help="where identified.yaml, identification.json and frf.png go (created if missing)")
+    add_run_folders(parser, "identified.yaml, identification.json and frf.png")
     parser.add_argument("--band-hz", type=band, default=None, metavar="LOW,HIGH",
                         help="frequency band of the fit (Hz) (default: half the design's first fixed-base frequency to "
                         "1.5 times its last)")

@@ -249,6 +249,13 @@ def add_overrides(parser: argparse.ArgumentParser, example: str) -> None:
     )
 
 
+def add_run_folders(parser: argparse.ArgumentParser, outputs: str) -> None:
+    """``RUN [RUN ...]`` and ``--out DIR``: an identification from run folders, writing ``outputs`` to DIR."""
+    parser.add_argument("runs", nargs="+", metavar="RUN", help="run folders (each holding metadata.json)")
+    parser.add_argument("--out", required=True, type=output_dir, metavar="DIR",
+                        help=f"where {outputs} go (created if missing)")
+
+
 def add_profile_argument(parser: argparse.ArgumentParser, default_help: str) -> None:
     """The optional positional PROFILE: a YAML file or the name of a shipped profile (:func:`profile_path`)."""
     parser.add_argument("profile", nargs="?", type=profile_path, metavar="PROFILE",
