@@ -219,20 +219,35 @@ class SensorStuck(Detector):
 
 class _PairRates(Detector):
     """What ``sensor_disagree`` and ``sensor_sign_flip`` share: per pair (table ``x_0``/``xdot_0``,
-    base mat ``y_b``/``ydot_b``) the finite-difference derivative of the displacement and the
-    measured velocity, both through the same first-order low-pass (``disagree_filter_s``),
-    updated on fresh samples, and a persistence timer per pair on a condition of the two.
-    Subclasses give the condition (:meth:`_bad`).
+    base mat ``y_b``/``ydot_b``) the finite-difference derivative of the displacement between two
+    fresh samples and the mean of the two velocity samples at the same instants (trapezoidal
+    rule), both through the same first-order low-pass (``disagree_filter_s``), updated on fresh
+    samples, and a persistence timer per pair on a condition of the two. Subclasses give the
+    condition (:meth:`_bad`).
+
+    Why the mean and not the newest velocity: the derivative is the mean velocity over the span
+    between the two samples, centred half a span back. Compared with the newest velocity it lags
+    by half the span, which is half a period on time but half a stall after one: through a
+    reversal after a ridden-through stall of 60-80 ms the two had opposite signs for 20 ms and
+    more with nothing wrong (docs/SAFETY.md, "Sign flips"). The endpoint mean is centred where
+    the derivative is, whatever the span.
+
+    A span of ``persist_s`` or more (a stall, an outage) is a gap: one derivative across it
+    would stand for the whole window the condition must persist through, and it averages the
+    motion over as long. The pair starts again from the new sample (filters primed with the
+    velocity, so the condition clears and its persistence restarts).
     """
 
-    __slots__ = ("_deriv", "_vel", "_timers", "_prev_x", "_since_s", "_primed", "_now", "_pair")
+    __slots__ = ("_deriv", "_vel", "_timers", "_gap_s", "_prev_x", "_prev_v", "_since_s", "_primed", "_now", "_pair")
 
     def __init__(self, filter_s: float, persist_s: float) -> None:
         super().__init__()
         self._deriv = (LowPass(filter_s), LowPass(filter_s))
         self._vel = (LowPass(filter_s), LowPass(filter_s))
         self._timers = (Persistence(persist_s), Persistence(persist_s))
+        self._gap_s = persist_s
         self._prev_x = [0.0, 0.0]
+        self._prev_v = [0.0, 0.0]
         self._since_s = [0.0, 0.0]
         self._primed = [False, False]
         self._now = [0.0] * 4
@@ -246,14 +261,15 @@ class _PairRates(Detector):
         self._since_s[pair] += dt
         if fresh:
             x, v = self._now[2 * pair], self._now[2 * pair + 1]
-            if self._primed[pair] and self._since_s[pair] > 0.0:
-                span = self._since_s[pair]
+            span = self._since_s[pair]
+            if self._primed[pair] and 0.0 < span < self._gap_s:
                 self._deriv[pair].update((x - self._prev_x[pair]) / span, span)
-                self._vel[pair].update(v, span)
-            elif not self._primed[pair]:
+                self._vel[pair].update(0.5 * (self._prev_v[pair] + v), span)
+            elif not self._primed[pair] or span >= self._gap_s:  # first sample, or after a gap: start again
                 self._deriv[pair].reset(v, True)
                 self._vel[pair].reset(v, True)
             self._prev_x[pair] = x
+            self._prev_v[pair] = v
             self._primed[pair] = True
             self._since_s[pair] = 0.0
         return self._timers[pair].update(t, self._bad(pair))

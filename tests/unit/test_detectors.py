@@ -341,10 +341,11 @@ def _ramp_run(config: SensorConfig, pair: str, speed_m_s: float, flipped_ticks, 
 def test_sensor_sign_flip_at_and_around_its_time_and_floor(pair: str) -> None:
     n = round(SENSORS.sign_flip_time_s / DT)  # ticks the condition must hold
     speed = SENSORS.sign_flip_floor_m_s * 1.01
-    # the flip starts at tick 100: it fires on the first tick with t - onset >= sign_flip_time_s ...
-    assert _ramp_run(UNFILTERED, pair, speed, range(100, 10_000), 1000) == 100 + n
+    # the flip starts at tick 100, where the velocity's endpoint mean (+v, -v) is 0; the condition
+    # holds from tick 101 and fires on the first tick with t - onset >= sign_flip_time_s ...
+    assert _ramp_run(UNFILTERED, pair, speed, range(100, 10_000), 1000) == 101 + n
     # ... and not when the signs agree again one tick earlier
-    assert _ramp_run(UNFILTERED, pair, speed, range(100, 100 + n), 1000) is None
+    assert _ramp_run(UNFILTERED, pair, speed, range(100, 101 + n), 1000) is None
     # opposite signs below the floor are not judged
     assert _ramp_run(UNFILTERED, pair, SENSORS.sign_flip_floor_m_s * 0.99, range(100, 10_000), 1000) is None
     det = SensorSignFlip(UNFILTERED)
@@ -413,6 +414,65 @@ def test_sensor_sign_flip_quiet_for_consistent_signals_and_for_noise_around_zero
             read(health)
             assert not det.update(k * RIG_DT, RIG_DT, health), det.detail(health)
         det.reset()
+
+
+def _stalled_sine_worst_held(det, frequency_hz: float, stall_s: float, stall_at_s: float, dt: float = 0.01) -> float:
+    """Longest time (s) ``det``'s base-mat condition held, the base mat moving as a consistent sine at
+    0.1 m/s and ``frequency_hz``, the loop ticking every ``dt`` with one stall of ``stall_s`` at
+    ``stall_at_s``; ``t`` and ``dt`` as the loop gives them (skipped deadlines included)."""
+    health = _health(table_fresh=True, base_fresh=True)
+    w = 2 * math.pi * frequency_hz
+    t, step, worst = 0.0, dt, 0.0
+    while t < 1.6:
+        health.meas.base_velocity_m_s = 0.1 * math.cos(w * t)
+        health.meas.base_displacement_m = 0.1 / w * math.sin(w * t)
+        det.update(t, step, health)
+        worst = max(worst, det._timers[1].held_s(t))
+        step = stall_s + dt if stall_at_s <= t < stall_at_s + dt else dt
+        t += step
+    return worst
+
+
+@pytest.mark.parametrize("frequency_hz", [2.0, 5.0])
+@pytest.mark.parametrize("stall_s", [0.04, 0.08, 0.13])
+def test_pair_checks_quiet_through_a_reversal_after_a_stall(frequency_hz: float, stall_s: float) -> None:
+    """A stall the loop rides through, just before a reversal, with consistent signals: no condition at all.
+
+    The derivative across a stall is the mean velocity over it, centred half a stall back; judged
+    against the newest velocity it had the opposite sign for up to 140 ms at 100 Hz (a false
+    sensor_sign_flip in a real-time dry run on a slow host). Every stall position before the
+    reversal is tried."""
+    reversal_s = 1.0 + 0.25 / frequency_hz
+    for k in range(30):
+        stall_at_s = reversal_s - (stall_s + 0.03) * k / 30
+        for det in (SensorSignFlip(SENSORS), SensorDisagree(SENSORS)):
+            assert _stalled_sine_worst_held(det, frequency_hz, stall_s, stall_at_s) == 0.0, (det.NAME, stall_at_s)
+
+
+@pytest.mark.parametrize("flipped_from", ["start", "stall"])
+def test_a_flip_trips_within_its_bound_after_a_stall(flipped_from: str) -> None:
+    """A gap starts the pair again; a flip that was there before the stall (not yet tripped) or that
+    begins with it trips within the bound counted from the stall's end: the filtered velocity's
+    onset tau ln(2 v / (v - floor)), then sign_flip_time_s."""
+    det = SensorSignFlip(SENSORS)
+    speed, stall_tick = 0.05, 20  # the stall comes before a flip from the start has tripped (~34 ms)
+    health = _health(table_fresh=True, base_fresh=True)
+    t, k, fired_at, stall_end = 0.0, 0, None, None
+    while t < 2.0 and fired_at is None:
+        step = 0.08 if k == stall_tick else DT
+        t += step
+        k += 1
+        if k == stall_tick + 1:
+            stall_end = t
+        flipped = flipped_from == "start" or stall_end is not None
+        health.meas.base_displacement_m = speed * t
+        health.meas.base_velocity_m_s = -speed if flipped else speed
+        if det.update(t, step, health):
+            fired_at = t
+    assert fired_at is not None and stall_end is not None and fired_at > stall_end
+    tau, floor = SENSORS.disagree_filter_s, SENSORS.sign_flip_floor_m_s
+    bound_s = tau * math.log(2 * speed / (speed - floor)) + SENSORS.sign_flip_time_s + 3 * DT
+    assert SENSORS.sign_flip_time_s <= fired_at - stall_end <= bound_s
 
 
 def test_sensor_sign_flip_restarts_when_the_signs_agree_and_on_reset() -> None:
