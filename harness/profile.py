@@ -124,7 +124,7 @@ class Profile:
         controller, the friction estimator and the supervisor use ``structure`` and
         ``bearing`` (:mod:`harness.rig.truth`).
         """
-        return resolve_truth(self.structure, self.bearing, self.rig.truth)
+        return resolve_truth(self.structure, self.bearing, self.rig.truth, self.rig.actuator.hydraulics)
 
     def resolved_data(self) -> dict:
         """The fully resolved profile as plain data (SI), for run folders and the rig process."""

@@ -41,8 +41,13 @@ examples:
   harness identify actuator profiles/my_rig.yaml --interface socketcan --channel can0 --blocked --out frf/
 
 DIR gets frf.csv (free) and frf_blocked.csv (blocked): freq_hz,magnitude,phase_deg,coherence
-within the band, frf.png (the Bode plot of every condition in DIR), excitation.json and one
-run folder per condition.
+within the band, frf_velocity.csv (free: command to sliding velocity), frf.png (the Bode plot
+of every condition in DIR), excitation.json and one run folder per condition. Then the SPEC 7a
+model is fitted to every response in DIR: identified.yaml (an --overlay with the values the
+data determine: force loop bandwidth, valve bandwidth, with a free condition the bulk modulus,
+with a band reaching half the valve's frequency the delay), identification.json (values,
+standard errors, fit error in % and deg, what was held and why) and actuator_fit.png.
+Both conditions and a band past the force loop give the most: --both --band-hz 1,80 --amplitude-N 700.
 """
 
 
@@ -160,5 +165,13 @@ def run(args: argparse.Namespace, console: Console) -> int:
         console.print(f"not armed for the {result.declined} condition")
     if result.plot_path is not None:
         console.print(f"Bode plot: {result.plot_path}; excitation: {result.excitation_path}", highlight=False)
+    if result.fit is not None:
+        from harness.identification.actuator import summary_lines
+
+        console.print("[bold]SPEC 7a model fitted[/] to every response in DIR:")
+        for line in summary_lines(result.fit):
+            console.print(f"  {escape(line)}", highlight=False)
+        console.print(f"overlay: {result.fit.overlay_path}; record: {result.fit.record_path}; plot: {result.fit.plot_path}",
+                      highlight=False)
     return result.exit_code
 

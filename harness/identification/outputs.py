@@ -65,16 +65,26 @@ def _yaml_value(value: float | tuple[float, ...] | None) -> str:
 def overlay_text(header: Sequence[str], sections: Mapping[str, Sequence[OverlayValue]]) -> str:
     """The text of ``identified.yaml``: ``header`` as comment lines, then each section's keys with their comments.
 
-    A section with no value is written as a comment saying so, not as an empty mapping.
+    A section's name may be a dotted path (``rig.actuator.hydraulics.cylinder``): it is written
+    nested, sharing the mappings it has in common with the sections before it. A section with
+    no value is written as a comment saying so, not as an empty mapping.
     """
     lines = [f"# {line}" if line else "#" for line in header]
+    opened: list[str] = []
     for section, values in sections.items():
         if not values:
             lines.append(f"# {section}: nothing determined (identification.json says why)")
             continue
-        lines.append(f"{section}:")
+        path = section.split(".")
+        shared = 0
+        while shared < min(len(opened), len(path)) and opened[shared] == path[shared]:
+            shared += 1
+        for depth in range(shared, len(path)):
+            lines.append(f"{'  ' * depth}{path[depth]}:")
+        opened = path
+        indent = "  " * len(path)
         for item in values:
-            lines.append(f"  {item.key}: {_yaml_value(item.value)}   # {item.comment}")
+            lines.append(f"{indent}{item.key}: {_yaml_value(item.value)}   # {item.comment}")
     return "\n".join(lines) + "\n"
 
 

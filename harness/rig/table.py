@@ -22,6 +22,7 @@ import numpy as np
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, acceleration_maps
 from harness.model.hydraulics import pack_rig
+from harness.rig.truth import true_hydraulics
 from harness.model.plant import Plant, TableMotion
 
 if TYPE_CHECKING:
@@ -41,7 +42,8 @@ def rig_params_for(rig: RigConfig | None, building: BuildingConfig) -> np.ndarra
     if not hydraulic and rig.table.model == "motion_source" and not rig.base_pinned:
         return None
     return pack_rig(
-        rig.actuator.hydraulics if hydraulic else None, rig.table, building.base_mass_kg, rig.base_pinned,
+        true_hydraulics(rig.actuator.hydraulics, rig.truth.actuator) if hydraulic else None, rig.table,
+        building.base_mass_kg, rig.base_pinned,
         rig.drive.decay_time_constant_s,
     )
 

@@ -3,8 +3,9 @@
 A real rig is not the model its controller was designed on: the bearing's friction varies
 with pressure, temperature and wear, and stiffnesses are identified with error (SPEC 7c).
 ``rig.truth`` gives the virtual rig its own values. It has two subsections shaped like the
-profile's top-level ``structure`` and ``bearing`` sections; every field is optional and
-overrides the top-level value for the rig only::
+profile's top-level ``structure`` and ``bearing`` sections, and ``actuator`` with the control
+actuator's hydraulics (:class:`ActuatorTruth`, over ``rig.actuator.hydraulics``); every field
+is optional and overrides the believed value for the rig only::
 
     rig:
       truth:
@@ -41,6 +42,7 @@ from typing import Any
 from harness.errors import ProfileError
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, fixed_base_modes
+from harness.model.hydraulics import CylinderConfig, HydraulicActuatorConfig
 
 #: Key path of the section in a profile, for messages.
 TRUTH_KEY = "rig.truth"
@@ -84,14 +86,54 @@ class BearingTruth:
 
 
 @dataclass(frozen=True)
+class ActuatorTruth:
+    """``rig.truth.actuator``: the control actuator's hydraulics as the rig really has them, each optional.
+
+    ``rig.actuator`` is what the lab believes of its actuator (the class of equipment, or an
+    identification's overlay); these values are the rig's, hidden from everything but the
+    virtual rig's plant and ``simulate --rig-effects``' twin. The force loop's gain ``K_p``
+    follows the true cylinder: a lab tunes it on its rig to ``force_loop_bandwidth_hz``.
+    """
+
+    force_loop_bandwidth_hz: float | None = _like(HydraulicActuatorConfig, "force_loop_bandwidth_hz")
+    bulk_modulus_Pa: float | None = _like(CylinderConfig, "bulk_modulus_Pa")
+    valve_bandwidth_hz: float | None = _like(CylinderConfig, "valve_bandwidth_hz")
+    valve_damping_ratio: float | None = _like(CylinderConfig, "valve_damping_ratio")
+    leakage_m3_per_s_Pa: float | None = _like(CylinderConfig, "leakage_m3_per_s_Pa")
+
+
+@dataclass(frozen=True)
 class TruthConfig:
-    """``rig.truth``: the virtual rig's own structure and bearing values; empty = the rig is the design."""
+    """``rig.truth``: the virtual rig's own structure, bearing and actuator values; empty = the rig is the design."""
 
     structure: StructureTruth = field(default_factory=StructureTruth)
     bearing: BearingTruth = field(default_factory=BearingTruth)
+    actuator: ActuatorTruth = field(default_factory=ActuatorTruth)
 
 
-def given(override: StructureTruth | BearingTruth) -> dict[str, Any]:
+def true_hydraulics(believed: HydraulicActuatorConfig, truth: ActuatorTruth | None) -> HydraulicActuatorConfig:
+    """The control actuator's true hydraulics: ``rig.actuator.hydraulics`` with ``truth``'s fields replaced.
+
+    Raises
+    ------
+    ProfileError
+        At ``rig.truth.actuator`` when the merge is not a valid actuator.
+    """
+    if truth is None:
+        return believed
+    changes = given(truth)
+    loop = {k: changes.pop(k) for k in ("force_loop_bandwidth_hz",) if k in changes}
+    try:
+        return dataclasses.replace(believed, cylinder=dataclasses.replace(believed.cylinder, **changes), **loop)
+    except ValueError as err:
+        raise ProfileError(str(err), None, f"{TRUTH_KEY}.actuator") from err
+
+
+def _believed_value(believed: HydraulicActuatorConfig, key: str) -> Any:
+    return getattr(believed, key) if key == "force_loop_bandwidth_hz" else getattr(believed.cylinder, key)
+
+
+def given(override: StructureTruth | BearingTruth | ActuatorTruth) -> dict[str, Any]:
     """The fields an override section sets (name -> value), in declaration order."""
     return {f.name: getattr(override, f.name) for f in dataclasses.fields(override) if getattr(override, f.name) is not None}
 
@@ -179,7 +221,10 @@ class RigTruth:
     differences: tuple[TruthDifference, ...]
 
 
-def resolve_truth(building: BuildingConfig, bearing: BearingConfig, truth: TruthConfig | None) -> RigTruth:
+def resolve_truth(
+    building: BuildingConfig, bearing: BearingConfig, truth: TruthConfig | None,
+    hydraulics: HydraulicActuatorConfig | None = None,
+) -> RigTruth:
     """The rig's truth from the design's ``structure`` and ``bearing`` and the ``rig.truth`` section.
 
     Parameters
@@ -188,6 +233,9 @@ def resolve_truth(building: BuildingConfig, bearing: BearingConfig, truth: Truth
         The design: the profile's top-level sections.
     truth : TruthConfig or None
         ``rig.truth`` (None: no overrides).
+    hydraulics : HydraulicActuatorConfig, optional
+        ``rig.actuator.hydraulics``, what the lab believes of its actuator: the actuator's
+        differences are listed against it.
 
     Raises
     ------
@@ -201,6 +249,9 @@ def resolve_truth(building: BuildingConfig, bearing: BearingConfig, truth: Truth
         TruthDifference(f"structure.{key}", value, _design_value(building, key))
         for key, value in given(truth.structure).items() if key not in _NOT_PHYSICS
     ] + [TruthDifference(f"bearing.{key}", value, getattr(bearing, key)) for key, value in given(truth.bearing).items()]
+    if hydraulics is not None:
+        differences += [TruthDifference(f"actuator.{key}", value, _believed_value(hydraulics, key))
+                        for key, value in given(truth.actuator).items()]
     return RigTruth(true_b, true_f, tuple(d for d in differences if not _same(d.true_value, d.design_value)))
 
 

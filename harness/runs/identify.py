@@ -32,6 +32,8 @@ from typing import Literal
 import numpy as np
 
 from harness import exit_codes
+from harness.identification.actuator import ActuatorIdentification, identify_actuator_fit
+from harness.identification.actuator_fit import VELOCITY_FILE
 from harness.identification.excitation import (
     Excitation,
     ExcitationController,
@@ -48,7 +50,7 @@ from harness.recording.metadata import environment, write_json_atomic
 from harness.runs.dry_run import private_bus, serving_virtual_rig
 from harness.runs.options import prepare_motion
 from harness.runs.session import SessionResult, SessionSettings, run_session
-from harness.signals.columns import FORCE_COMMAND, FORCE_MEASURED, TIME
+from harness.signals.columns import FORCE_COMMAND, FORCE_MEASURED, SLIDING_VELOCITY, TIME
 
 Condition = Literal["free", "blocked"]
 CONDITIONS: tuple[Condition, ...] = ("free", "blocked")
@@ -117,6 +119,7 @@ class IdentifyResult:
     excitation_path: Path
     plot_path: Path | None = None
     declined: Condition | None = None  # the condition the operator did not arm for (a real rig)
+    fit: ActuatorIdentification | None = None  # the SPEC 7a model fitted to every response in DIR
 
     @property
     def exit_code(self) -> int:
@@ -153,8 +156,10 @@ def on_tick_grid(t_s: np.ndarray, values: np.ndarray, rate_hz: float) -> np.ndar
     return np.interp(grid, t_s, values)
 
 
-def estimate_from_run(run_path: Path, start_t_s: float, excitation: Excitation, rate_hz: float) -> FrequencyResponse:
-    """The H1 estimate from a finished run folder, force command to measured force, within the excitation's band.
+def estimate_from_run(
+    run_path: Path, start_t_s: float, excitation: Excitation, rate_hz: float, output: str = FORCE_MEASURED,
+) -> FrequencyResponse:
+    """The H1 estimate from a finished run folder, force command to ``output``, within the excitation's band.
 
     Parameters
     ----------
@@ -164,12 +169,15 @@ def estimate_from_run(run_path: Path, start_t_s: float, excitation: Excitation, 
     excitation : Excitation
     rate_hz : float
         The loop's rate (Hz).
+    output : str
+        The output's column: the load cell's force (default) or the sliding velocity (the free
+        condition's ``T``, :data:`~harness.identification.actuator_fit.VELOCITY_FILE`).
     """
     run = load_run(run_path)
     t = run[TIME]
     span = excitation_span(t, start_t_s, excitation.duration_s, rate_hz)
     command = on_tick_grid(t[span], run[FORCE_COMMAND][span], rate_hz)
-    measured = on_tick_grid(t[span], run[FORCE_MEASURED][span], rate_hz)
+    measured = on_tick_grid(t[span], run[output][span], rate_hz)
     response = h1_estimate(command, measured, rate_hz, excitation.segment_samples(rate_hz))
     return response.within(excitation.low_hz, excitation.high_hz)
 
@@ -305,10 +313,15 @@ def identify_actuator(
             done.response = estimate_from_run(session.run_path, start, excitation, rate_hz)
             done.frf_path = write_frf_csv(out_dir / FRF_FILES[condition], done.response)
             entry["frf_file"] = done.frf_path.name
+            if condition == "free":  # what moved the piston: the fit's T (harness/identification/actuator_fit.py)
+                velocity = estimate_from_run(session.run_path, start, excitation, rate_hz, SLIDING_VELOCITY)
+                entry["velocity_file"] = write_frf_csv(out_dir / VELOCITY_FILE, velocity).name
         runs[condition] = entry
         _write_excitation_record(out_dir, profile, options, runs)
         if done.response is None:
             break  # a trip or a stop: the next condition does not run
+    if any(done.response is not None for done in result.conditions):
+        result.fit = identify_actuator_fit(out_dir, profile, options.in_lockstep)
     result.plot_path = plot_conditions(out_dir, f"{profile.name}: actuator force command to load cell, H1 ({excitation.signal}, "
                                                 f"{excitation.amplitude_N:g} N, {excitation.low_hz:g}-{excitation.high_hz:g} Hz)")
     return result

@@ -1,0 +1,323 @@
+"""The control actuator's model (SPEC 7a) fitted to its measured frequency responses.
+
+Linearised about zero load pressure (the orifice's ``sqrt((p_s - sign(x_v) p_L) / p_s)`` is
+within 7 % of 1 at the 2 kN excitation), the servo-valve driven cylinder under its force loop
+(:mod:`harness.model.hydraulics`) gives, with the loop's gain on a blocked piston
+``w_f = K_p (4 beta_e / V_t) A q_nl`` and the valve ``G_v(s) = w_v^2 / (s^2 + 2 zeta_v w_v s + w_v^2)``::
+
+    F = [w_f G_v(s) u_c - k_h xdot_b] / D(s),     D(s) = s + c + w_f G_v(s)        (F1)
+
+``k_h = 4 beta_e A^2 / V_t`` the hydraulic stiffness, ``c = k_h C_l / A^2`` the leakage's
+pole. What the loop records adds a delay ``tau`` between the command and the load cell (the
+command's transport, the status frame's period, the hold of the command over a tick).
+
+- **Blocked** (``xdot_b = 0``): ``H_b = e^{-s tau} w_f G_v / D``.
+- **Free**: the base mat moves, ``xdot_b`` answers the force through the structure, its
+  bearings' friction and the table. Taking the cross-spectrum of (F1) with the command gives,
+  exactly and whatever moves the base mat (friction included),
+  ``H_free = e^{-s tau} (w_f G_v - k_h T) / D`` with ``T`` the measured response from the
+  command to the sliding velocity (:data:`VELOCITY_FILE`). No model of the structure is
+  needed: the free condition adds ``k_h`` alone.
+
+The fit: least squares on the complex response (real and imaginary parts of the relative
+error ``(H_model - H) / |H|``), both conditions together, each bin weighted by
+``sqrt(2 n_d gamma^2 / (1 - gamma^2))``, the inverse of the H1 estimate's relative standard
+deviation (Bendat & Piersol) with ``n_d`` the Welch segments, ``gamma^2`` capped at
+:data:`COHERENCE_CAP`. Standard errors come from the Jacobian (:mod:`.fit_statistics`).
+
+Which groups the data determine (:data:`FITTED`, :data:`HELD`): the force loop's gain
+``w_f`` (the blocked response's bandwidth), the valve's natural frequency ``w_v`` (inside
+the loop it shapes the closed loop's magnitude near ``w_f``, which a pure delay cannot), the
+delay ``tau`` (phase the loop's magnitude does not explain), and with a free condition ``k_h``.
+Held at the profile's values: ``zeta_v`` (below ``w_v`` the valve's phase is
+``2 zeta_v w / w_v``, so ``zeta_v`` and ``w_v`` trade one for the other; :func:`fit_actuator`
+reports their correlation when both are freed) and ``C_l`` (its pole ``c`` is below 1 rad/s,
+a gain change of 0.01 dB within the band). ``A``, ``V_t``, ``q_nl`` and ``K_p`` enter only
+through ``w_f`` and ``k_h``; with the cylinder's geometry (``A``, ``V_t``) known from its
+drawings, ``k_h`` gives the bulk modulus ``beta_e = k_h V_t / (4 A^2)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize
+
+from harness.identification.fit_statistics import covariance, relative_error
+from harness.identification.frf import FrequencyResponse
+from harness.model.hydraulics import HydraulicActuatorConfig
+
+#: The measured response from the command to the sliding velocity, free condition (m/s per N).
+VELOCITY_FILE = "frf_velocity.csv"
+#: Coherence is capped here in the weights: beyond it the estimate's bias (the orifice's
+#: nonlinearity, leakage, the hold between ticks) exceeds its variance.
+COHERENCE_CAP = 0.999
+#: The fitted parameters, in the order of the fit's vector.
+FITTED = ("force_loop_bandwidth_hz", "valve_bandwidth_hz", "delay_s", "hydraulic_stiffness_N_per_m", "velocity_lag_s")
+#: Fitted only with a free condition.
+FREE_ONLY = ("hydraulic_stiffness_N_per_m", "velocity_lag_s")
+#: Held at the profile's values, and why.
+HELD = {
+    "valve_damping_ratio": "below the valve's natural frequency its phase is 2 zeta_v w / w_v: zeta_v and w_v trade one "
+                           "for the other (their correlation when both are freed is reported)",
+    "leakage_m3_per_s_Pa": "its pole c = k_h C_l / A^2 is below 1 rad/s: a gain change of about 0.01 dB within the band",
+}
+#: Relative standard error above which a fitted value counts as not determined by the data.
+DETERMINED_REL_ERROR = 0.1
+
+
+@dataclass(frozen=True)
+class ActuatorParameters:
+    """The linearised actuator of (F1).
+
+    Attributes
+    ----------
+    force_loop_bandwidth_hz : float
+        ``w_f / 2 pi`` (Hz).
+    valve_bandwidth_hz, valve_damping_ratio : float
+        ``w_v / 2 pi`` (Hz) and ``zeta_v``.
+    delay_s : float
+        ``tau`` (s), command to recorded load cell.
+    hydraulic_stiffness_N_per_m : float
+        ``k_h`` (N/m).
+    leakage_pole_per_s : float
+        ``c`` (1/s).
+    velocity_lag_s : float
+        How much later the sliding velocity is measured than the load cell's force (s): the
+        velocity sensors' conditioning delay (``rig.sensors.velocity.delay_s``).
+    """
+
+    force_loop_bandwidth_hz: float
+    valve_bandwidth_hz: float
+    valve_damping_ratio: float
+    delay_s: float
+    hydraulic_stiffness_N_per_m: float
+    leakage_pole_per_s: float = 0.0
+    velocity_lag_s: float = 0.0
+
+    @classmethod
+    def from_config(cls, hydraulics: HydraulicActuatorConfig, delay_s: float, velocity_lag_s: float = 0.0) -> ActuatorParameters:
+        """The profile's actuator (``rig.actuator.hydraulics``) with a delay ``delay_s`` (s)."""
+        c = hydraulics.cylinder
+        return cls(
+            hydraulics.force_loop_bandwidth_hz, c.valve_bandwidth_hz, c.valve_damping_ratio, delay_s,
+            c.hydraulic_stiffness_N_per_m, c.hydraulic_stiffness_N_per_m * c.leakage_m3_per_s_Pa / c.piston_area_m2**2,
+            velocity_lag_s,
+        )
+
+    def vector(self) -> np.ndarray:
+        """The :data:`FITTED` values."""
+        return np.array([getattr(self, name) for name in FITTED])
+
+    def with_vector(self, values: np.ndarray) -> ActuatorParameters:
+        """These parameters with the :data:`FITTED` ones replaced."""
+        changes = dict(zip(FITTED, (float(v) for v in values), strict=True))
+        return ActuatorParameters(**{**self.__dict__, **changes})
+
+
+def _loop_terms(p: ActuatorParameters, freq_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(w_f G_v, D, e^{-s tau})`` at ``s = j 2 pi f``."""
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    w_v = 2.0 * np.pi * p.valve_bandwidth_hz
+    valve = w_v**2 / (s**2 + 2.0 * p.valve_damping_ratio * w_v * s + w_v**2)
+    gain = 2.0 * np.pi * p.force_loop_bandwidth_hz * valve
+    return gain, s + p.leakage_pole_per_s + gain, np.exp(-s * p.delay_s)
+
+
+def blocked_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
+    """``H_b(j w)``: command to recorded load cell with the piston held (N/N, complex)."""
+    gain, denominator, delay = _loop_terms(p, freq_hz)
+    return delay * gain / denominator
+
+
+def velocity_feedback_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
+    """``k_h / D(j w)``: the force the sliding velocity bleeds, per m/s (N s/m, complex); ``k_h / w_f`` at low frequency.
+
+    With :func:`blocked_response` it is the whole actuator of (F1), whatever it pushes.
+    """
+    _, denominator, _ = _loop_terms(p, freq_hz)
+    return p.hydraulic_stiffness_N_per_m / denominator
+
+
+def free_response(p: ActuatorParameters, freq_hz: np.ndarray, velocity_response: np.ndarray) -> np.ndarray:
+    """``H_free(j w)`` given the measured command-to-sliding-velocity response ``T`` (m/s per N, complex).
+
+    The delay ``tau`` is the command's: the velocity bleeds the force where it is, so ``T`` enters
+    as measured, advanced by the velocity sensors' delay relative to the load cell
+    (:attr:`ActuatorParameters.velocity_lag_s`).
+    """
+    gain, denominator, delay = _loop_terms(p, freq_hz)
+    lead = np.exp(2j * np.pi * np.asarray(freq_hz, dtype=float) * p.velocity_lag_s)
+    return (delay * gain - p.hydraulic_stiffness_N_per_m * velocity_response * lead) / denominator
+
+
+def complex_response(response: FrequencyResponse) -> np.ndarray:
+    """A measured response as complex numbers."""
+    return response.magnitude * np.exp(1j * np.radians(response.phase_deg))
+
+
+def bin_weights(response: FrequencyResponse, segments: float) -> np.ndarray:
+    """``sqrt(2 n_d gamma^2 / (1 - gamma^2))`` per bin, ``gamma^2`` capped at :data:`COHERENCE_CAP`."""
+    coherence = np.clip(response.coherence, 0.0, COHERENCE_CAP)
+    return np.sqrt(2.0 * segments * coherence / (1.0 - coherence))
+
+
+@dataclass(frozen=True)
+class Measured:
+    """What the fit is given: the blocked response, and optionally the free one with its ``T``.
+
+    Attributes
+    ----------
+    blocked : FrequencyResponse or None
+    free, velocity : FrequencyResponse or None
+        Both or neither: the free response and the command-to-sliding-velocity one, same bins.
+    segments : float
+        Welch segments averaged per estimate (``n_d``), for the weights.
+    """
+
+    blocked: FrequencyResponse | None = None
+    free: FrequencyResponse | None = None
+    velocity: FrequencyResponse | None = None
+    segments: float = 8.0
+
+    def __post_init__(self) -> None:
+        if (self.free is None) != (self.velocity is None):
+            raise ValueError("expected the free response together with its command-to-sliding-velocity response")
+        if self.blocked is None and self.free is None:
+            raise ValueError("expected a blocked or a free response to fit")
+        if self.free is not None and self.velocity is not None and not np.allclose(self.free.freq_hz, self.velocity.freq_hz):
+            raise ValueError("expected the free and the sliding-velocity responses on the same frequencies")
+
+
+@dataclass(frozen=True)
+class ConditionError:
+    """The fit's error over the band in one condition: ``|H_fit| / |H| - 1`` (%) and the phase difference (deg)."""
+
+    condition: str
+    magnitude_rms_pct: float
+    magnitude_max_pct: float
+    phase_rms_deg: float
+    phase_max_deg: float
+
+    def as_dict(self) -> dict[str, float | str]:
+        """For ``identification.json``."""
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class ActuatorFit:
+    """The fitted actuator and how well the data determine it.
+
+    Attributes
+    ----------
+    parameters : ActuatorParameters
+    standard_errors : dict of str to float
+        Per :data:`fitted` name, in its unit.
+    fitted : tuple of str
+        The names fitted (``hydraulic_stiffness_N_per_m`` only with a free condition).
+    errors : tuple of ConditionError
+    valve_correlation : float
+        Correlation of ``w_v`` and ``zeta_v`` when both are freed at the solution (why ``zeta_v`` is held).
+    """
+
+    parameters: ActuatorParameters
+    standard_errors: dict[str, float]
+    fitted: tuple[str, ...]
+    errors: tuple[ConditionError, ...]
+    valve_correlation: float = math.nan
+    notes: tuple[str, ...] = field(default=())
+
+    def determined(self, name: str) -> bool:
+        """True when ``name``'s relative standard error is at most :data:`DETERMINED_REL_ERROR`."""
+        return name in self.fitted and relative_error(getattr(self.parameters, name), self.standard_errors[name]) \
+            <= DETERMINED_REL_ERROR
+
+
+def _residuals(p: ActuatorParameters, measured: Measured) -> np.ndarray:
+    """Weighted relative complex errors of both conditions, real and imaginary parts stacked."""
+    parts = []
+    if measured.blocked is not None:
+        h = complex_response(measured.blocked)
+        error = (blocked_response(p, measured.blocked.freq_hz) - h) / np.abs(h)
+        parts.append(error * bin_weights(measured.blocked, measured.segments))
+    if measured.free is not None and measured.velocity is not None:
+        h = complex_response(measured.free)
+        model = free_response(p, measured.free.freq_hz, complex_response(measured.velocity))
+        parts.append((model - h) / np.abs(h) * bin_weights(measured.free, measured.segments))
+    stacked = np.concatenate(parts)
+    return np.concatenate([stacked.real, stacked.imag])
+
+
+def condition_error(condition: str, model: np.ndarray, response: FrequencyResponse) -> ConditionError:
+    """The fit's magnitude error (%) and phase error (deg) over ``response``'s band."""
+    ratio = np.abs(model) / response.magnitude - 1.0
+    phase = np.degrees(np.angle(model * np.exp(-1j * np.radians(response.phase_deg))))
+    return ConditionError(
+        condition, float(100 * np.sqrt(np.mean(ratio**2))), float(100 * np.max(np.abs(ratio))),
+        float(np.sqrt(np.mean(phase**2))), float(np.max(np.abs(phase))),
+    )
+
+
+def fit_actuator(measured: Measured, start: ActuatorParameters, hold: tuple[str, ...] = ()) -> ActuatorFit:
+    """Fit (F1) to the measured responses, from ``start`` (the profile's actuator).
+
+    Parameters
+    ----------
+    measured : Measured
+    start : ActuatorParameters
+        First guess and the held values (``zeta_v``, ``c``).
+    hold : tuple of str
+        :data:`FITTED` names to hold at ``start``'s values as well.
+
+    Returns
+    -------
+    ActuatorFit
+    """
+    names = tuple(n for n in FITTED if n not in hold and (measured.free is not None or n not in FREE_ONLY))
+    index = [FITTED.index(n) for n in names]
+    scale = start.vector()[index]
+    scale = np.where(scale > 0, scale, 1e-3)
+
+    def params(x: np.ndarray) -> ActuatorParameters:
+        full = start.vector()
+        full[index] = x * scale
+        return start.with_vector(full)
+
+    solution = optimize.least_squares(
+        lambda x: _residuals(params(x), measured), np.ones(len(names)), bounds=(1e-3, 1e3), x_scale="jac", method="trf",
+    )
+    best = params(solution.x)
+    cov = covariance(solution.jac, solution.fun) * np.outer(scale, scale)
+    errors = {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(names)}
+    conditions = []
+    if measured.blocked is not None:
+        conditions.append(condition_error("blocked", blocked_response(best, measured.blocked.freq_hz), measured.blocked))
+    if measured.free is not None and measured.velocity is not None:
+        model = free_response(best, measured.free.freq_hz, complex_response(measured.velocity))
+        conditions.append(condition_error("free", model, measured.free))
+    return ActuatorFit(best, errors, tuple(names), tuple(conditions), _valve_correlation(best, measured))
+
+
+def _valve_correlation(p: ActuatorParameters, measured: Measured) -> float:
+    """Correlation of ``w_v`` and ``zeta_v`` from the Jacobian at ``p`` with both free."""
+    base = np.array([p.valve_bandwidth_hz, p.valve_damping_ratio])
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        valve = {"valve_bandwidth_hz": x[0] * base[0], "valve_damping_ratio": x[1] * base[1]}
+        changed = ActuatorParameters(**{**p.__dict__, **valve})
+        return _residuals(changed, measured)
+
+    r0 = residual(np.ones(2))
+    step = 1e-5
+    jac = np.column_stack([(residual(np.ones(2) + step * np.eye(2)[k]) - r0) / step for k in range(2)])
+    cov = np.linalg.pinv(jac.T @ jac)
+    denominator = math.sqrt(cov[0, 0] * cov[1, 1])
+    return float(cov[0, 1] / denominator) if denominator > 0 else math.nan
+
+
+def bulk_modulus_Pa(hydraulic_stiffness_N_per_m: float, hydraulics: HydraulicActuatorConfig) -> float:
+    """``beta_e = k_h V_t / (4 A^2)`` (Pa) with the cylinder's geometry from the profile."""
+    c = hydraulics.cylinder
+    return hydraulic_stiffness_N_per_m * c.oil_volume_m3 / (4.0 * c.piston_area_m2**2)
