@@ -76,6 +76,8 @@ class CaseSpec:
         argv = ["simulate", base.path, "--record", self.record.source, "--controller", self.controller]
         if base.variant:
             argv += ["--variant", base.variant]
+        if base.overlay:
+            argv += ["--overlay", base.overlay]
         if self.pga_g is not None:
             argv += ["--pga", repr(self.pga_g)]
         flags = {"duration_s": "--duration", "time_scale": "--time-scale", "rate_hz": "--rate",
@@ -188,7 +190,8 @@ def _records(study: Study, profile: Profile) -> list[StudyRecord]:
 
 def base_of(study: Study) -> BaseProfile:
     """Where the study's base profile comes from."""
-    return BaseProfile(str(study.profile_path()), study.variant, tuple(study.set))
+    overlay = study.overlay_path()
+    return BaseProfile(str(study.profile_path()), study.variant, tuple(study.set), None if overlay is None else str(overlay))
 
 
 def expand(study: Study) -> list[CaseSpec]:

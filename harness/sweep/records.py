@@ -15,6 +15,7 @@ from pathlib import Path
 
 from harness.errors import ProfileError, RecordError
 from harness.motions.catalog import RECORD_SUFFIXES, looks_like_path, resolve_record, synthetic_seed
+from harness.motions.white_noise import white_noise_spec
 
 
 @dataclass(frozen=True)
@@ -26,9 +27,9 @@ class StudyRecord:
     label : str
         Its name in the results (``el_centro``, a file's stem, ``synthetic:2``).
     source : str
-        What the simulation is given: an absolute file path, or ``synthetic[:SEED]``.
+        What the simulation is given: an absolute file path, ``synthetic[:SEED]`` or ``white_noise:LOW-HIGH[:PGA]``.
     digest : str
-        SHA-256 of the file's bytes, or the synthetic name.
+        SHA-256 of the file's bytes, or the generated record's name (in full, for white noise).
     """
 
     label: str
@@ -62,7 +63,7 @@ def study_records(entries: tuple[str, ...], base_dir: Path, records_dir: Path | 
     Parameters
     ----------
     entries : tuple of str
-        Names (``el_centro``, ``synthetic:3``), record files, or folders (every record file in it).
+        Names (``el_centro``, ``synthetic:3``, ``white_noise:0.5-20``), record files, or folders (every record file in it).
     base_dir : Path
         Relative paths are relative to this (the study file's directory, or the profile's).
     records_dir : Path, optional
@@ -77,6 +78,10 @@ def study_records(entries: tuple[str, ...], base_dir: Path, records_dir: Path | 
     for entry in entries:
         if synthetic_seed(entry) is not None:
             found.append(StudyRecord(entry.strip(), entry.strip(), entry.strip()))
+            continue
+        noise = white_noise_spec(entry)  # generated from the profile's record.seed: its name is its content
+        if noise is not None:
+            found.append(StudyRecord(entry.strip(), entry.strip(), noise.name))
             continue
         path = Path(entry).expanduser()
         path = path if path.is_absolute() else base_dir / path

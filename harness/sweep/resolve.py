@@ -37,16 +37,17 @@ class BaseProfile:
     path: str
     variant: str | None = None
     overrides: tuple[str, ...] = ()
+    overlay: str | None = None
 
     def load(self) -> Profile:
         """The base profile, loaded once per process (:func:`base_profile`)."""
-        return base_profile(self.path, self.variant, self.overrides)
+        return base_profile(self.path, self.variant, self.overrides, self.overlay)
 
 
 @functools.lru_cache(maxsize=8)
-def base_profile(path: str, variant: str | None, overrides: tuple[str, ...]) -> Profile:
-    """``load_profile(path, variant, overrides)``, cached for the life of the process."""
-    return load_profile(path, variant=variant, overrides=list(overrides))
+def base_profile(path: str, variant: str | None, overrides: tuple[str, ...], overlay: str | None = None) -> Profile:
+    """``load_profile(path, variant, overrides, overlay)``, cached for the life of the process."""
+    return load_profile(path, variant=variant, overrides=list(overrides), overlay=overlay)
 
 
 @functools.lru_cache(maxsize=1)
@@ -66,7 +67,7 @@ def case_profile(base: BaseProfile, overrides: tuple[str, ...]) -> Profile:
     Returns
     -------
     Profile
-        Equal to ``load_profile(base.path, base.variant, base.overrides + overrides)``.
+        Equal to ``load_profile(base.path, base.variant, base.overrides + overrides, base.overlay)``.
 
     Raises
     ------
@@ -78,7 +79,7 @@ def case_profile(base: BaseProfile, overrides: tuple[str, ...]) -> Profile:
         return profile
     changes = parse_overrides(overrides)
     if not set(changes) <= FAST_SECTIONS or not all(isinstance(change, dict) for change in changes.values()):
-        return load_profile(base.path, variant=base.variant, overrides=[*base.overrides, *overrides])
+        return load_profile(base.path, variant=base.variant, overrides=[*base.overrides, *overrides], overlay=base.overlay)
     source = f"{base.path} (with --set {' '.join(overrides)})"
     types = _section_types()
     sections = {

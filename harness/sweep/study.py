@@ -166,6 +166,10 @@ class Study:
     description: str = ""
     variant: str | None = quantity(None, doc="a variant of the profile applied to every case")
     set: tuple[str, ...] = quantity((), doc="KEY.PATH=VALUE overrides applied to every case, as --set")
+    overlay: str | None = quantity(
+        None, doc="a profile overlay (e.g. an identification's identified.yaml, relative to the study file) merged after "
+                  "the variant and before set, as --overlay",
+    )
     options: CaseOptions = dataclasses.field(default_factory=CaseOptions)
     axes: Axes = dataclasses.field(default_factory=Axes)
     monte_carlo: MonteCarlo | None = None
@@ -189,6 +193,10 @@ class Study:
     def profile_path(self) -> Path:
         """The base profile file, absolute."""
         return (self.base_dir / Path(self.profile).expanduser()).resolve()
+
+    def overlay_path(self) -> Path | None:
+        """The overlay file, absolute, or None."""
+        return None if self.overlay is None else (self.base_dir / Path(self.overlay).expanduser()).resolve()
 
     def records_dir(self) -> Path | None:
         """``options.records_dir`` made absolute (relative to the study file), or None."""

@@ -103,6 +103,37 @@ def test_a_sweep_case_gives_exactly_the_peaks_of_harness_simulate(tmp_path, caps
             assert swept == pytest.approx(simulated, rel=1e-9, abs=1e-15)
 
 
+def test_a_study_overlay_reaches_every_case_and_its_simulate_command(tmp_path, capsys):
+    """``overlay:`` in a study file is merged as --overlay is (after the variant, before set), changes the
+    cases' keys (a study with another overlay is another study), and ``--case`` prints it."""
+    overlay = tmp_path / "identified.yaml"
+    overlay.write_text("bearing:\n  mu_max: 0.09\n")
+    body = "name: overlaid\noverlay: identified.yaml\noptions: {duration_s: 2}\naxes:\n  records: ['synthetic:4']\n" \
+           "  controllers: [OF-I]\n"
+    study = _study(tmp_path, body)
+    status, out = _sweep(capsys, str(study), "--out", str(tmp_path / "with"), "--workers", "0")
+    assert status == 0, out
+    (key, row), = _rows(tmp_path / "with").items()
+    status, out = _sweep(capsys, str(study), "--case", key[:8])
+    argv = shlex.split(out.strip())[1:]
+    assert argv[argv.index("--overlay") + 1] == str(overlay.resolve())
+    path = tmp_path / "case.json"
+    assert main([*argv, "--json", str(path), "--quiet"]) == 0
+    capsys.readouterr()
+    for swept, simulated in _simulated_peaks(row, json.loads(path.read_text())):
+        assert swept == pytest.approx(simulated, rel=1e-9, abs=1e-15)
+    plain = _study(tmp_path, body.replace("overlay: identified.yaml\n", ""), name="plain.yaml")
+    status, out = _sweep(capsys, str(plain), "--out", str(tmp_path / "without"), "--workers", "0")
+    assert status == 0, out
+    (other, plain_row), = _rows(tmp_path / "without").items()
+    assert other != key  # the overlay is part of what a case is
+    assert plain_row["passive.sliding_displacement_m"] != row["passive.sliding_displacement_m"]
+    (tmp_path / "bad.yaml").write_text("bearing:\n  mu_max: -1\n")
+    bad = _study(tmp_path, body.replace("identified.yaml", "bad.yaml"), name="bad_study.yaml")
+    status, out = _sweep(capsys, str(bad), "--out", str(tmp_path / "bad"), "--workers", "0")
+    assert status == 2 and "mu_max" in out
+
+
 RESUME = """\
 name: resume
 options: {duration_s: 2}

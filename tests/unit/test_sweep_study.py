@@ -181,3 +181,16 @@ def test_distributions_map_probabilities_to_values():
     assert values[:, 1].min() >= 0.8 and values[:, 1].max() <= 1.2
     assert abs(np.mean(values[:, 1]) - 1.0) < 0.01
     assert abs(np.median(values[:, 2]) - 2.0) < 0.1
+
+
+def test_white_noise_is_a_record_of_a_study_named_by_its_whole_spec(tmp_path):
+    text = BASE.replace('records: ["synthetic:1", "synthetic:2"]', 'records: ["white_noise:0.5-20", "white_noise:1-10:0.05"]')
+    study = load_study(_study_file(tmp_path, text))
+    cases = expand(study)
+    assert case_count(study).total == len(cases)
+    labels = sorted({case.record.label for case in cases})
+    assert labels == ["white_noise:0.5-20", "white_noise:1-10:0.05"]
+    digests = {case.record.label: case.record.digest for case in cases}
+    assert digests["white_noise:0.5-20"] == "white_noise:0.5-20:0.1"  # the amplitude spelled out: another default, another case
+    bad = BASE.replace('records: ["synthetic:1", "synthetic:2"]', 'records: ["white_noise:20-5"]')
+    assert "axes.records[0]" in str(_refused(tmp_path, bad))
