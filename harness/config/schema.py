@@ -190,14 +190,16 @@ def _build_union(tp: Any, value: Any, meta: Mapping[str, Any], path: str, source
         if kind not in kinds:
             raise ProfileError(f"found kind {_describe(kind)}, expected kind one of {', '.join(map(repr, kinds))}", source, path)
         return build(kinds[kind], value, source=source, path=path)
-    last_error: ProfileError | None = None
+    errors: list[ProfileError] = []
     for option in options:
         try:
             return _build_value(option, value, meta, path, source)
         except ProfileError as err:
-            last_error = err
-    assert last_error is not None
-    raise last_error
+            errors.append(err)
+    expected = [err.detail.split("expected ", 1)[1] for err in errors if "expected " in err.detail]
+    if len(expected) == len(errors) > 1 and not classes:  # a scalar of either kind: say both, e.g. 0..99 or 'auto'
+        raise ProfileError(f"found {_describe(value)}, expected {' or '.join(expected)}", source, path)
+    raise errors[-1]
 
 
 def _build_tuple(tp: Any, value: Any, meta: Mapping[str, Any], path: str, source: str | None) -> tuple:

@@ -232,9 +232,9 @@ def summary_lines(result: ActuatorIdentification) -> list[str]:
     p = fit.parameters
     lines = []
     for name in fit.fitted:
-        value, error = getattr(p, name), fit.standard_errors[name]
+        value, standard_error = getattr(p, name), fit.standard_errors[name]
         state = "" if fit.determined(name) else "  (not determined: left out of the overlay)"
-        lines.append(f"{name} = {value:.5g} +/- {error:.2g}{state}")
+        lines.append(f"{name} = {value:.5g} +/- {standard_error:.2g}{state}")
     for error in fit.errors:
         lines.append(f"fit error {error.condition}: magnitude {error.magnitude_rms_pct:.2f} % rms "
                      f"({error.magnitude_max_pct:.2f} % max), phase {error.phase_rms_deg:.2f} deg rms "

@@ -22,7 +22,7 @@ from harness.loop.operator import OperatorSignals
 from harness.loop.status import LoopStatus
 from harness.loop.tick import ControlTick
 from harness.loop.timing import TimingStats
-from harness.realtime.host import apply_realtime, restore_realtime
+from harness.realtime.host import Scheduling, apply_realtime, restore_realtime
 from harness.realtime.scheduler import FixedRateScheduler
 from harness.recording.layout import Outcome
 from harness.safety.lifecycle import State
@@ -52,6 +52,8 @@ class LoopResult:
     trip_detail: str = ""
     timing: dict = field(default_factory=dict)
     realtime_report: list[str] = field(default_factory=list)
+    #: The loop thread's scheduling during the run (:meth:`~harness.realtime.host.Scheduling.as_dict`).
+    scheduling: dict = field(default_factory=dict)
     operator_stopped: bool = False
     record_start_t_s: float | None = None
     #: The table against its record (:meth:`harness.safety.table_record.TableRecordCheck.summary`).
@@ -99,8 +101,12 @@ class ControlLoop:
         clock: Callable[[], float] = time.perf_counter,
         sleep: Callable[[float], None] = time.sleep,
         table_running: Callable[[], bool] | None = None,
+        scheduling: Scheduling | None = None,
     ):
         self.tick = tick
+        #: A SCHED_FIFO request the caller already made for this thread (None: :meth:`run` makes it, in
+        #: real time only; a lockstep run keeps normal scheduling: it runs flat out and would hold a core).
+        self.scheduling = scheduling
         self.table_running = table_running
         self._awaiting_table = False
         self.config = config
@@ -210,7 +216,9 @@ class ControlLoop:
         """Run the whole test: arm, settle, the record, the tail, the ramp-down."""
         duration_s = self.duration_s
         timing = self.timing
-        report = apply_realtime(self.config.realtime)
+        scheduling = self.scheduling if self.scheduling is not None or self.lockstep is None else Scheduling(
+            self.config.realtime.fifo_priority, 0, False, "", (0, 0))
+        report = apply_realtime(self.config.realtime, scheduling)
         tick, health = self.tick, self.tick.health
         run_started = armed_at = None
         finished_at = None
@@ -271,6 +279,7 @@ class ControlLoop:
                     "longest_stall_s": self.longest_stall_s, "stall_budget_s": self.max_stall_s,
                     "lockstep": self.lockstep is not None},
             realtime_report=report.lines,
+            scheduling=report.scheduling.as_dict(),
             operator_stopped=self.signals.stop_requested,
             record_start_t_s=run_started,
             table_record=supervisor.table_record.summary(),

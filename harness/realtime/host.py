@@ -5,6 +5,15 @@ whether it was granted and, if not, why (for example "SCHED_FIFO refused: operat
 not permitted; run as root or grant CAP_SYS_NICE / an rtprio limit"). The garbage
 collector is frozen and disabled for the run (its pauses show as 10-20 ms spikes:
 benchmarks/README.md, "Timing facts the loop is built on") and restored afterwards.
+
+SCHED_FIFO (``loop.realtime.fifo_priority``) is ``auto`` by default: the loop's thread takes
+priority :data:`AUTO_LOOP_PRIORITY` and the virtual rig's process :data:`AUTO_RIG_PRIORITY`
+where the process may (root, CAP_SYS_NICE or an rtprio limit), and runs as before where it may
+not, with one line saying how to permit it. The policy is the calling thread's (Linux), so the
+recorder and the console, started before, keep normal scheduling; it is given back when the
+run ends (:func:`restore_scheduling`), so what follows (the reference simulation, the report)
+never runs at real-time priority. docs/SAFETY.md, "Real-time priority and the host", says what
+keeps a real-time loop from starving the machine.
 """
 
 from __future__ import annotations
@@ -14,20 +23,106 @@ import ctypes.util
 import gc
 import os
 from dataclasses import dataclass, field
+from typing import Final, Literal
 
 from harness.config.schema import quantity
 
 _MCL_CURRENT, _MCL_FUTURE = 1, 2
 
 
+#: ``fifo_priority: auto``: use SCHED_FIFO where the process may, else normal scheduling.
+AUTO: Final = "auto"
+#: The loop's priority under ``auto``: above the kernel's threaded interrupt handlers (50) and
+#: below its watchdog and migration threads (99), as real-time control loops usually take.
+AUTO_LOOP_PRIORITY = 80
+#: The virtual rig's process under ``auto``: one below the loop, which wins a shared core.
+AUTO_RIG_PRIORITY = 79
+#: How to permit SCHED_FIFO, for the line said when it was not permitted.
+HOW_TO_PERMIT = (
+    "to permit it: run as root, or give the interpreter CAP_SYS_NICE (sudo setcap cap_sys_nice+ep "
+    "$(readlink -f .venv/bin/python)), or an rtprio limit (a line '<user> - rtprio 90' in "
+    "/etc/security/limits.conf, then log in again)"
+)
+
+
 @dataclass(frozen=True)
 class RealtimeConfig:
     """Real-time requests of the loop (profile section ``loop.realtime``)."""
 
-    fifo_priority: int = quantity(0, ge=0, le=99, doc="SCHED_FIFO priority; 0 = do not ask")
+    fifo_priority: int | Literal["auto"] = quantity(
+        AUTO, ge=0, le=99,
+        doc="SCHED_FIFO priority; auto = 80 for the loop (79 for the virtual rig) where permitted, else normal; 0 = do not ask",
+    )
     cpu_affinity: tuple[int, ...] = quantity((), ge=0, doc="CPUs to pin the loop to; empty = do not pin")
     lock_memory: bool = field(default=False, metadata={"doc": "mlockall(MCL_CURRENT | MCL_FUTURE)"})
     disable_gc: bool = field(default=True, metadata={"doc": "freeze and disable the garbage collector during a run"})
+
+
+@dataclass
+class Scheduling:
+    """What SCHED_FIFO request was made for this thread and what it got.
+
+    Attributes
+    ----------
+    asked : int or "auto"
+        ``fifo_priority`` as the profile gives it.
+    priority : int
+        The priority tried (0: none was).
+    granted : bool
+    line : str
+        One line for the console and ``metadata.json``; "" when nothing was asked.
+    previous : tuple of (int, int)
+        The thread's policy and priority before, given back by :func:`restore_scheduling`.
+    """
+
+    asked: int | str = 0
+    priority: int = 0
+    granted: bool = False
+    line: str = ""
+    previous: tuple[int, int] = (0, 0)
+
+    def as_dict(self) -> dict:
+        """For ``metadata.json``: asked, the policy in effect and its priority."""
+        return {"asked": self.asked, "policy": "SCHED_FIFO" if self.granted else "normal",
+                "priority": self.priority if self.granted else 0}
+
+
+def request_fifo(asked: int | str, auto_priority: int = AUTO_LOOP_PRIORITY, what: str = "the loop") -> Scheduling:
+    """Ask SCHED_FIFO for the calling thread; never raises for a refusal, says it instead.
+
+    Parameters
+    ----------
+    asked : int or "auto"
+        A priority (1-99), 0 (ask nothing) or ``auto`` (``auto_priority`` where permitted).
+    auto_priority : int
+        The priority ``auto`` stands for.
+    what : str
+        Whose priority it is, for the line (``the loop``, ``the virtual rig``).
+    """
+    previous = (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority)
+    if asked == 0:
+        return Scheduling(asked, 0, False, "", previous)
+    priority = auto_priority if asked == AUTO else int(asked)
+    label = f"SCHED_FIFO priority {priority} for {what}" + (" (auto)" if asked == AUTO else "")
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except OSError as err:
+        reason = err.strerror or str(err)
+        if asked == AUTO:
+            line = f"{label}: not permitted here ({reason}); running with normal scheduling; {HOW_TO_PERMIT}"
+        else:
+            line = (f"{label}: refused ({reason}); run as root or grant CAP_SYS_NICE or an rtprio limit "
+                    "(/etc/security/limits.conf); running with normal scheduling")
+        return Scheduling(asked, priority, False, line, previous)
+    return Scheduling(asked, priority, True, f"{label}: granted", previous)
+
+
+def restore_scheduling(scheduling: Scheduling) -> None:
+    """Give the calling thread back the policy it had before :func:`request_fifo` (if that granted one)."""
+    if scheduling.granted:
+        policy, priority = scheduling.previous
+        os.sched_setscheduler(0, policy, os.sched_param(priority))
+        scheduling.granted = False
 
 
 @dataclass
@@ -36,17 +131,9 @@ class RealtimeReport:
 
     lines: list[str] = field(default_factory=list)
     gc_was_enabled: bool = True
-
-
-def _fifo(priority: int, report: RealtimeReport) -> None:
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-        report.lines.append(f"SCHED_FIFO priority {priority}: granted")
-    except (PermissionError, OSError) as err:
-        report.lines.append(
-            f"SCHED_FIFO priority {priority}: refused ({err.strerror or err}); run as root or grant CAP_SYS_NICE "
-            "or an rtprio limit (/etc/security/limits.conf); running with normal scheduling"
-        )
+    scheduling: Scheduling = field(default_factory=Scheduling)
+    #: True when :func:`apply_realtime` made the request itself (and :func:`restore_realtime` gives it back).
+    owns_scheduling: bool = False
 
 
 def _affinity(cpus: tuple[int, ...], report: RealtimeReport) -> None:
@@ -69,11 +156,17 @@ def _lock_memory(report: RealtimeReport) -> None:
         report.lines.append(f"locked memory (mlockall): refused ({err}); raise the memlock limit (ulimit -l) or run as root")
 
 
-def apply_realtime(config: RealtimeConfig) -> RealtimeReport:
-    """Apply what ``config`` asks for; never raises for a refusal, reports it instead."""
-    report = RealtimeReport(gc_was_enabled=gc.isenabled())
-    if config.fifo_priority:
-        _fifo(config.fifo_priority, report)
+def apply_realtime(config: RealtimeConfig, scheduling: Scheduling | None = None) -> RealtimeReport:
+    """Apply what ``config`` asks for; never raises for a refusal, reports it instead.
+
+    ``scheduling``: a request already made (the session makes it before its pre-flight check,
+    so that the check measures the scheduling the run gets); None makes it here.
+    """
+    owns = scheduling is None
+    scheduling = request_fifo(config.fifo_priority) if scheduling is None else scheduling
+    report = RealtimeReport(gc_was_enabled=gc.isenabled(), scheduling=scheduling, owns_scheduling=owns)
+    if scheduling.line:
+        report.lines.append(scheduling.line)
     if config.cpu_affinity:
         _affinity(config.cpu_affinity, report)
     if config.lock_memory:
@@ -87,7 +180,9 @@ def apply_realtime(config: RealtimeConfig) -> RealtimeReport:
 
 
 def restore_realtime(report: RealtimeReport) -> None:
-    """Undo the garbage-collector change (scheduling ends with the process)."""
+    """Undo the garbage-collector change, and the scheduling if :func:`apply_realtime` asked for it."""
     gc.unfreeze()
     if report.gc_was_enabled:
         gc.enable()
+    if report.owns_scheduling:
+        restore_scheduling(report.scheduling)

@@ -15,10 +15,14 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
+from harness.realtime.host import AUTO_RIG_PRIORITY, Scheduling, request_fifo, restore_scheduling
 from harness.realtime.scheduler import FixedRateScheduler
 
 
-def serve(rig, stop: threading.Event, poll_timeout_s: float = 0.002, sleep: Callable[[float], None] | None = None) -> None:
+def serve(
+    rig, stop: threading.Event, poll_timeout_s: float = 0.002, sleep: Callable[[float], None] | None = None,
+    fifo_priority: int | str = 0,
+) -> None:
     """Serve ``rig`` (a :class:`~harness.rig.virtual_rig.VirtualRig`) until ``stop`` is set.
 
     Parameters
@@ -29,24 +33,40 @@ def serve(rig, stop: threading.Event, poll_timeout_s: float = 0.002, sleep: Call
         Longest blocking wait for a frame in lockstep (s).
     sleep : callable, optional
         Sleep function of the real-time scheduler (default ``time.sleep``).
+    fifo_priority : int or "auto"
+        ``loop.realtime.fifo_priority``: SCHED_FIFO for this thread while it serves in real time
+        (``auto``: :data:`~harness.realtime.host.AUTO_RIG_PRIORITY`, one below the loop, where
+        permitted); normal scheduling in lockstep, where the rig runs flat out.
     """
     try:
-        _loop(rig, stop, poll_timeout_s, sleep)
+        _loop(rig, stop, poll_timeout_s, sleep, fifo_priority)
     except Exception as err:  # noqa: BLE001 - a thread cannot raise to its owner: keep it for VirtualRig.error
         rig.error = err
 
 
-def _loop(rig, stop: threading.Event, poll_timeout_s: float, sleep: Callable[[float], None] | None) -> None:
+def _loop(
+    rig, stop: threading.Event, poll_timeout_s: float, sleep: Callable[[float], None] | None, fifo_priority: int | str,
+) -> None:
     kwargs = {"sleep": sleep} if sleep is not None else {}
     scheduler = FixedRateScheduler(rig.schedule.sensor_period_s, spin_s=0.0, clock=rig.clock, **kwargs)
     started = False
-    while not stop.is_set():
-        if rig.lockstep:
-            started = False
-            rig.service(rig.clock(), wait_s=poll_timeout_s)
-            continue
-        if not started:
-            scheduler.start()
-            started = True
-        scheduler.wait()
-        rig.service(rig.clock())
+    scheduling: Scheduling | None = None
+    try:
+        while not stop.is_set():
+            if rig.lockstep:
+                if scheduling is not None:
+                    restore_scheduling(scheduling)
+                    scheduling = None
+                started = False
+                rig.service(rig.clock(), wait_s=poll_timeout_s)
+                continue
+            if not started:
+                scheduling = request_fifo(fifo_priority, AUTO_RIG_PRIORITY, "the virtual rig")
+                rig.scheduling_line = scheduling.line
+                scheduler.start()
+                started = True
+            scheduler.wait()
+            rig.service(rig.clock())
+    finally:
+        if scheduling is not None:
+            restore_scheduling(scheduling)

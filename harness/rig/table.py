@@ -22,8 +22,8 @@ import numpy as np
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, acceleration_maps
 from harness.model.hydraulics import pack_rig
-from harness.rig.truth import true_hydraulics
 from harness.model.plant import Plant, TableMotion
+from harness.rig.truth import true_hydraulics
 
 if TYPE_CHECKING:
     from harness.motions import GroundMotion

@@ -132,6 +132,8 @@ class VirtualRig:
         self._truth = np.zeros(len(SIGNALS))
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        #: What the serving thread's SCHED_FIFO request got, once it served in real time ("" before, or if none was asked).
+        self.scheduling_line = ""
         self._stop_event = threading.Event()
         self.error: BaseException | None = None
         #: Each state change, one line each, for a terminal that prints from its own thread (``harness rig``).
@@ -445,8 +447,11 @@ class VirtualRig:
         return record_columns(self.history, self.table.record, self.step_period_s)
 
     # --------------------------------------------------------------- thread
-    def start_thread(self, poll_timeout_s: float = 0.002, sleep: Callable[[float], None] = time.sleep) -> None:
-        """Serve the bus in a daemon thread (real time or lockstep, as commanded).
+    def start_thread(
+        self, poll_timeout_s: float = 0.002, sleep: Callable[[float], None] = time.sleep, fifo_priority: int | str = 0,
+    ) -> None:
+        """Serve the bus in a daemon thread (real time or lockstep, as commanded); ``fifo_priority`` as
+        :func:`harness.rig.runner.serve` takes it.
 
         If the loop fails (e.g. the bus goes away) the thread ends and keeps the
         exception in :attr:`error`; :attr:`serving` turns False.
@@ -455,7 +460,7 @@ class VirtualRig:
             return
         self._stop_event.clear()
         self._thread = threading.Thread(
-            target=serve, args=(self, self._stop_event, poll_timeout_s, sleep), name="virtual-rig", daemon=True
+            target=serve, args=(self, self._stop_event, poll_timeout_s, sleep, fifo_priority), name="virtual-rig", daemon=True
         )
         self._thread.start()
 

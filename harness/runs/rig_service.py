@@ -128,7 +128,7 @@ def serve_rig(
             can_config=can_config,
         )
         status = exit_codes.OK
-        rig.start_thread()
+        rig.start_thread(fifo_priority=profile.loop.realtime.fifo_priority)  # in real time only (harness.rig.runner)
         try:
             if on_ready is not None:
                 on_ready(rig)

@@ -30,6 +30,7 @@ from harness.loop.table_link import CanTableLink
 from harness.loop.tick import ControlTick
 from harness.model.warmup import warm_up
 from harness.profile import Profile
+from harness.realtime.host import Scheduling, request_fifo, restore_scheduling
 from harness.recording import RunFolder
 from harness.recording.layout import Outcome, RunKind
 from harness.recording.runfolder import check_log_dir
@@ -247,6 +248,7 @@ def run_session(
     if table_link is not None:
         on_start, stop_table = table_link.start, table_link.stop
     check_log_dir(settings.log_dir)  # before the bus opens: an unwritable log directory is bad input, nothing started
+    scheduling: Scheduling | None = None
     link = open_harness(settings.can)
     folder = None
     try:
@@ -266,12 +268,14 @@ def run_session(
             on_link(link)
         if settings.reset_drive:
             _reset_drive(link, folder, console)
+        if not settings.lockstep:  # before the pre-flight check, so that it measures the scheduling the run gets
+            scheduling = request_fifo(profile.loop.realtime.fifo_priority)
         host_timing = None if settings.lockstep else _check_host_timing(profile, settings, link, folder, on_host_timing)
         lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None
         status = LoopStatus()
         tick.attach_status(status)  # stories, fault code and event lines for the live console
         loop = ControlLoop(tick, profile.loop, profile.control.rate_hz, settings.duration_s, lockstep, on_start, status,
-                           table_running=table_link.running if table_link is not None else None)
+                           table_running=table_link.running if table_link is not None else None, scheduling=scheduling)
         controller_name = settings.metadata.get("controller", profile.control.controller)  # an excitation names itself
         title = f"{profile.name}: {settings.kind}, {controller_name} at {profile.control.rate_hz:g} Hz"
         title += " (lockstep)" if lockstep else ""
@@ -295,7 +299,8 @@ def run_session(
             table_link.stop(loop.scheduler.elapsed_s)  # the end of the run (a trip's stop is its trip action)
         bus = bus_statistics(link)
         folder.finish(result.outcome, trip_reason=result.trip_reason or None,
-                      summary={"timing": result.timing, "realtime": result.realtime_report, "bus": bus,
+                      summary={"timing": result.timing, "realtime": result.realtime_report,
+                               "scheduling": result.scheduling, "bus": bus,
                                "record_start_t_s": result.record_start_t_s, "table_record": result.table_record,
                                "host_timing": host_timing.as_dict() if host_timing else None})
         return SessionResult(result.outcome, result.trip_reason, folder.path, result, bus, folder.record_problem())
@@ -304,6 +309,8 @@ def run_session(
             folder.finish("error")  # idempotent: keeps an outcome already written
         raise
     finally:
+        if scheduling is not None:
+            restore_scheduling(scheduling)  # what follows (the reference simulation, the report) at normal priority
         link.writer.tap = None
         link.reader.tap = None
         link.close()
