@@ -11,11 +11,22 @@ recorder) is already running, and the wake-up lateness is measured. The verdict:
   already trip ``loop_stall`` (a 30 s run at 500 Hz has 15 000 of them), so the run is
   refused before anything moves (exit status 2), with the remedies.
 
+Over the same second it also watches the rig (``frame_counts``): at each wake-up, after the
+poll, how long ago each control measurement message (table, base mat) last arrived. That age is
+what ``sensor_stale`` judges against ``safety.sensors.max_sensor_age_s``, and a rig process the
+host does not schedule in time shows there, not in the loop's own lateness (the issue's case: a
+rig not scheduled for 22 ms while the loop's p99 lateness was 3.2 ms). The verdict takes the
+worse of the two: refused when the p99 age exceeds the limit (more than 1 % of the ticks would
+trip; a rig that sends nothing has an infinite age), marginal when the largest age exceeds half
+of it.
+
 The clock and the sleep are injectable, as for the scheduler, so tests run on a fake clock.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -53,22 +64,42 @@ class HostTiming:
     p99_s: float
     max_s: float
     stall_budget_s: float
+    rig_age_p99_s: float | None = None
+    rig_age_max_s: float | None = None
+    max_sensor_age_s: float | None = None
+
+    @property
+    def watched_rig(self) -> bool:
+        """True when the rig's frames were watched too."""
+        return self.rig_age_p99_s is not None and self.rig_age_max_s is not None and self.max_sensor_age_s is not None
 
     @property
     def verdict(self) -> str:
         """``"ok"``, ``"marginal"`` or ``"refused"`` (see the module docstring)."""
-        if self.p99_s > self.stall_budget_s:
+        rig_p99 = self.rig_age_p99_s if self.watched_rig else 0.0
+        rig_max = self.rig_age_max_s if self.watched_rig else 0.0
+        limit = self.max_sensor_age_s if self.watched_rig else math.inf
+        assert rig_p99 is not None and rig_max is not None and limit is not None
+        if self.p99_s > self.stall_budget_s or not rig_p99 <= limit:
             return "refused"
-        if self.p99_s > 1.0 / self.rate_hz or self.max_s > self.stall_budget_s / 2:
+        if self.p99_s > 1.0 / self.rate_hz or self.max_s > self.stall_budget_s / 2 or rig_max > limit / 2:
             return "marginal"
         return "ok"
 
     def summary(self) -> str:
         """One line for the console and the run's metadata."""
+        rig = ""
+        if self.watched_rig:
+            assert self.rig_age_p99_s is not None and self.rig_age_max_s is not None and self.max_sensor_age_s is not None
+            if math.isinf(self.rig_age_p99_s):
+                rig = "; the rig's sensor frames: none arrived (a rig that is silent or not serving this bus)"
+            else:
+                rig = (f"; the rig's sensor frames: age p99 {self.rig_age_p99_s * 1e3:.2f} ms, max "
+                       f"{self.rig_age_max_s * 1e3:.2f} ms against a limit of {self.max_sensor_age_s * 1e3:.1f} ms")
         return (
             f"host timing at {self.rate_hz:g} Hz over {self.wakeups} wake-ups: lateness p50 {self.p50_s * 1e6:.0f} us, "
             f"p99 {self.p99_s * 1e6:.0f} us, max {self.max_s * 1e3:.2f} ms against a stall budget of "
-            f"{self.stall_budget_s * 1e3:.1f} ms: {self.verdict}"
+            f"{self.stall_budget_s * 1e3:.1f} ms{rig}: {self.verdict}"
         )
 
     def check(self) -> None:
@@ -84,7 +115,8 @@ class HostTiming:
         return {
             "rate_hz": self.rate_hz, "wakeups": self.wakeups, "lateness_p50_s": self.p50_s,
             "lateness_p99_s": self.p99_s, "lateness_max_s": self.max_s, "stall_budget_s": self.stall_budget_s,
-            "verdict": self.verdict,
+            "rig_frame_age_p99_s": self.rig_age_p99_s, "rig_frame_age_max_s": self.rig_age_max_s,
+            "max_sensor_age_s": self.max_sensor_age_s, "verdict": self.verdict,
         }
 
 
@@ -96,6 +128,8 @@ def measure_host_timing(
     clock: Callable[[], float] = time.perf_counter,
     sleep: Callable[[float], None] = time.sleep,
     poll: Callable[[], object] | None = None,
+    frame_counts: Callable[[], tuple[int, ...]] | None = None,
+    max_sensor_age_s: float | None = None,
 ) -> HostTiming:
     """Run the loop's scheduler empty for ``duration_s`` and measure its wake-up lateness.
 
@@ -113,10 +147,20 @@ def measure_host_timing(
         As for :class:`~harness.realtime.scheduler.FixedRateScheduler`.
     poll : callable, optional
         Called at every wake-up: drain the bus as the loop would, so frames do not pile up.
+    frame_counts : callable, optional
+        After the poll, the accepted frames so far of each control measurement message (the
+        reader's counts): the rig is watched when given, with ``max_sensor_age_s``.
+    max_sensor_age_s : float, optional
+        ``safety.sensors.max_sensor_age_s`` (s).
     """
     period_s = 1.0 / rate_hz
     wakeups = max(10, int(round(duration_s / period_s)))
     lateness = np.empty(wakeups)
+    ages = np.empty(wakeups)
+    watch = frame_counts is not None and max_sensor_age_s is not None
+    counts = frame_counts() if frame_counts is not None and watch else ()
+    started = clock()
+    last_seen = [started if count else -math.inf for count in counts]  # frames before the check count from its start
     scheduler = FixedRateScheduler(period_s, spin_s, clock=clock, sleep=sleep)
     scheduler.start()
     previous = None
@@ -129,5 +173,16 @@ def measure_host_timing(
         previous = woke
         if poll is not None:
             poll()
+        if watch and frame_counts is not None:
+            now_counts = frame_counts()
+            for i, (before, after) in enumerate(zip(counts, now_counts, strict=True)):
+                if after != before:
+                    last_seen[i] = woke
+            counts = now_counts
+            ages[k] = woke - min(last_seen)  # the oldest of the messages: what sensor_stale would judge
     p50, p99 = np.percentile(lateness, [50, 99])
-    return HostTiming(float(rate_hz), wakeups, float(p50), float(p99), float(lateness.max()), float(stall_budget_s))
+    timing = HostTiming(float(rate_hz), wakeups, float(p50), float(p99), float(lateness.max()), float(stall_budget_s))
+    if not watch or max_sensor_age_s is None:
+        return timing
+    return dataclasses.replace(timing, rig_age_p99_s=float(np.percentile(ages, 99, method="higher")), rig_age_max_s=float(ages.max()),
+                               max_sensor_age_s=float(max_sensor_age_s))

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from drivers.link import HarnessLink
+from drivers.reader import CONTROL_MEASUREMENTS
 from harness import exit_codes
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness
@@ -173,9 +174,12 @@ def _reset_drive(link, folder, console) -> None:
 
 def _check_host_timing(profile: Profile, settings: SessionSettings, link, folder, report) -> HostTiming:
     """The pre-flight timing check (harness.loop.preflight); refuses the run, nothing moved, if it fails."""
+    samples = [link.reader.sample(name) for name in CONTROL_MEASUREMENTS]
     timing = measure_host_timing(
         profile.control.rate_hz, profile.safety.run.max_stall_s, profile.loop.spin_s,
         poll=lambda: link.reader.poll(0.0),  # drain what the rig sends; ages are judged from the loop's first tick
+        frame_counts=lambda: tuple(sample.count for sample in samples),  # and watch the rig's frames arrive
+        max_sensor_age_s=profile.safety.sensors.max_sensor_age_s,
     )
     folder.record_event(None, "timing", "host_timing", timing.summary())
     if report is not None:

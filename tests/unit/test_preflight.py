@@ -61,3 +61,59 @@ def test_summary_and_metadata_carry_the_figures():
     timing = HostTiming(500.0, 500, 1e-6, 3e-4, 4e-3, 0.02)
     assert timing.as_dict()["verdict"] == "ok" and timing.as_dict()["lateness_p99_s"] == 3e-4
     assert "p99 300 us" in timing.summary() and "max 4.00 ms" in timing.summary()
+
+
+class Rig:
+    """Frame counts of the two control measurement messages: one frame per ``period_s`` of the clock,
+    except during ``silent`` spans (start, end) of the clock's time."""
+
+    def __init__(self, clock: LateClock, period_s: float = 0.002, silent=()):
+        self.clock, self.period_s, self.silent = clock, period_s, silent
+        self.sent, self.next_s = 0, 0.0
+
+    def counts(self) -> tuple[int, int]:
+        while self.next_s <= self.clock.now:
+            if not any(a <= self.next_s < b for a, b in self.silent):
+                self.sent += 1
+            self.next_s += self.period_s
+        return (self.sent, self.sent)
+
+
+def _watch(rig: Rig, clock: LateClock) -> HostTiming:
+    return measure_host_timing(RATE_HZ, BUDGET_S, 0.0, 1.0, clock, clock.sleep, frame_counts=rig.counts,
+                               max_sensor_age_s=0.02)
+
+
+def test_a_rig_that_sends_steadily_leaves_the_verdict_to_the_loop():
+    clock = LateClock(0.0, 10**9)
+    timing = _watch(Rig(clock), clock)
+    assert timing.verdict == "ok" and timing.rig_age_max_s is not None and timing.rig_age_max_s < 0.005
+    assert "the rig's sensor frames: age p99" in timing.summary()
+    assert timing.as_dict()["rig_frame_age_max_s"] == timing.rig_age_max_s
+
+
+def test_a_rig_not_scheduled_for_22_ms_is_marginal_though_the_loop_is_on_time():
+    clock = LateClock(0.0, 10**9)  # the loop itself is on time: its own verdict would be ok
+    timing = _watch(Rig(clock, silent=[(0.5, 0.522)]), clock)
+    assert timing.p99_s < 1e-4
+    assert timing.rig_age_max_s == pytest.approx(0.024, abs=0.003)
+    assert timing.verdict == "marginal"
+
+
+def test_a_rig_that_is_often_late_is_refused_before_anything_moves():
+    clock = LateClock(0.0, 10**9)
+    gaps = [(0.1 * k, 0.1 * k + 0.03) for k in range(10)]  # a 30 ms gap every 100 ms: about 10 % of the ticks too old
+    timing = _watch(Rig(clock, silent=gaps), clock)
+    assert timing.rig_age_p99_s is not None and timing.rig_age_p99_s > 0.02
+    assert timing.verdict == "refused"
+    with pytest.raises(HostTimingRefused, match="the rig's sensor frames"):
+        timing.check()
+
+
+def test_a_silent_rig_is_refused_naming_it():
+    clock = LateClock(0.0, 10**9)
+    timing = _watch(Rig(clock, silent=[(0.0, 10.0)]), clock)
+    assert timing.verdict == "refused"
+    assert "none arrived" in timing.summary()
+    with pytest.raises(HostTimingRefused, match="none arrived"):
+        timing.check()
