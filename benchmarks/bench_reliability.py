@@ -12,9 +12,17 @@ script reports:
   (sleep, then spin) run empty at the same rate, on this machine, just before the runs,
   which is what the host alone allows.
 
+With ``--load N`` it first starts N busy processes (a CPU-bound Python loop each, as a laptop
+building software while a dry run runs) and keeps them running through every run; ``--set``
+passes profile overrides to every run (``--set loop.realtime.fifo_priority=0``: without
+real-time priority). A run the pre-flight check refuses (outcome ``refused``, nothing moved) is
+counted apart from a trip.
+
 Usage::
 
     python benchmarks/bench_reliability.py --runs 20
+    python benchmarks/bench_reliability.py --runs 10 --load 2                                  # every core busy
+    python benchmarks/bench_reliability.py --runs 10 --load 2 --set loop.realtime.fifo_priority=0
     python benchmarks/bench_reliability.py --runs 10 --record el_centro --pga 0.34 --time-scale 2 \\
         --records-dir ../shared/data/ground_motions
 
@@ -67,6 +75,8 @@ def one_run(args: argparse.Namespace, log_dir: Path) -> dict:
                         ("--time-scale", args.time_scale), ("--records-dir", args.records_dir), ("--rate", args.rate)):
         if value is not None:
             command += [flag, str(value)]
+    for setting in args.set:
+        command += ["--set", setting]
     started = time.monotonic()
     done = subprocess.run(command, capture_output=True, text=True, cwd=REPO)
     wall_s = time.monotonic() - started
@@ -84,6 +94,7 @@ def one_run(args: argparse.Namespace, log_dir: Path) -> dict:
         "cpu_p99_us": timing.get("cpu_p99_s", float("nan")) * 1e6,
         "stalls_ridden_through": timing.get("stalls_ridden_through"), "longest_stall_ms": timing.get("longest_stall_s", 0) * 1e3,
         "host_timing": (summary.get("host_timing") or {}).get("verdict"),
+        "scheduling": (summary.get("scheduling") or {}).get("policy"),
         "recorder_longest_hold_us": ((metadata.get("recorder") or {}).get("longest_hold_s") or 0.0) * 1e6,
         "threads": timing.get("threads"),
     }
@@ -97,7 +108,10 @@ def one_run(args: argparse.Namespace, log_dir: Path) -> dict:
 def table(results: list[dict], baseline: dict, args: argparse.Namespace) -> str:
     """The markdown summary."""
     completed = sum(r["outcome"] == "completed" for r in results)
-    reasons = collections.Counter(r["trip_reason"] or r["outcome"] for r in results if r["outcome"] != "completed")
+    refused = sum(r["outcome"] == "refused" for r in results)
+    reasons = collections.Counter(r["trip_reason"] or r["outcome"] for r in results
+                                  if r["outcome"] not in ("completed", "refused"))
+    policies = sorted({str(r.get("scheduling")) for r in results})
     hist = np.sum([r.get("gap_histogram", [0] * (len(GAP_EDGES_MS) + 1)) for r in results], axis=0)
     labels = (
         [f"< {GAP_EDGES_MS[0]:g}"]
@@ -110,12 +124,15 @@ def table(results: list[dict], baseline: dict, args: argparse.Namespace) -> str:
     hold = max((r.get("recorder_longest_hold_us") or 0.0) for r in results)
     case = f"{args.record or 'synthetic (default)'}" + (f", {args.pga} g" if args.pga else "") + (
         f", time scale {args.time_scale}" if args.time_scale else "") + f", {args.duration or 'profile'} s"
+    case += f", {args.load} busy processes" if args.load else ""
+    case += "".join(f", --set {setting}" for setting in args.set)
     lines = [
-        "| case | runs completed | trip reasons | loop CPU per tick median / p99 (us, median of runs) | "
-        "longest gap (ms) | recorder's longest lock hold (us) | bare loop p50 / p99 / max (us) |",
-        "|---|---|---|---|---|---|---|",
-        f"| {case} | {completed} / {len(results)} | {dict(reasons) or 'none'} | {cpu_med:.0f} / {cpu_p99:.0f} | "
-        f"{longest:.1f} | {hold:.0f} | {baseline['p50_us']:.1f} / {baseline['p99_us']:.0f} / {baseline['max_us']:.0f} |",
+        "| case | scheduling | runs completed | refused by the pre-flight | trips | loop CPU per tick median / p99 "
+        "(us, median of runs) | longest gap (ms) | recorder's longest lock hold (us) | bare loop p50 / p99 / max (us) |",
+        "|---|---|---|---|---|---|---|---|---|",
+        f"| {case} | {', '.join(policies)} | {completed} / {len(results)} | {refused} | {dict(reasons) or 'none'} | "
+        f"{cpu_med:.0f} / {cpu_p99:.0f} | {longest:.1f} | {hold:.0f} | "
+        f"{baseline['p50_us']:.1f} / {baseline['p99_us']:.0f} / {baseline['max_us']:.0f} |",
         "",
         "Gaps between tick starts, all runs (ms): "
         + ", ".join(f"{label}: {int(n)}" for label, n in zip(labels, hist, strict=True)),
@@ -133,9 +150,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--time-scale", type=float)
     parser.add_argument("--rate", type=float)
     parser.add_argument("--baseline-s", type=float, default=10.0, help="seconds of bare-loop baseline (default 10)")
+    parser.add_argument("--load", type=int, default=0, help="busy CPU-bound processes kept running throughout (default 0)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE", help="profile override for every run")
     parser.add_argument("--json", type=Path, default=REPO / "benchmarks" / "results" / "reliability.json")
     args = parser.parse_args(argv)
     rate = args.rate or 500.0
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(args.load)]
+    try:
+        return _measure(args, rate)
+    finally:
+        for hog in hogs:
+            hog.kill()
+            hog.wait()
+
+
+def _measure(args: argparse.Namespace, rate: float) -> int:
     baseline = bare_loop_baseline(rate, args.baseline_s, 0.02)
     print(f"bare loop at {rate:g} Hz for {args.baseline_s:g} s: p50 {baseline['p50_us']:.1f} us, "
           f"p99 {baseline['p99_us']:.0f} us, max {baseline['max_us']:.0f} us", flush=True)

@@ -11,7 +11,8 @@ from harness.safety.health import TickHealth
 #: What to do about a loop that the host keeps from running (printed with the trip).
 HOST_TIMING_REMEDIES = (
     "remedies: a lower --rate, --lockstep for a dry run, real-time priority "
-    "(loop.realtime.fifo_priority with an rtprio limit or CAP_SYS_NICE), or a quieter machine"
+    "(loop.realtime.fifo_priority: auto takes it where permitted: root, CAP_SYS_NICE or an rtprio limit), "
+    "or a quieter machine"
 )
 
 
