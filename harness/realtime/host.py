@@ -7,12 +7,13 @@ collector is frozen and disabled for the run (its pauses show as 10-20 ms spikes
 benchmarks/README.md, "Timing facts the loop is built on") and restored afterwards.
 
 SCHED_FIFO (``loop.realtime.fifo_priority``) is ``auto`` by default: the loop's thread takes
-priority :data:`AUTO_LOOP_PRIORITY` and the virtual rig's process :data:`AUTO_RIG_PRIORITY`
+priority :data:`AUTO_LOOP_PRIORITY` and the virtual rig's serving thread :data:`AUTO_RIG_PRIORITY`
 where the process may (root, CAP_SYS_NICE or an rtprio limit), and runs as before where it may
-not, with one line saying how to permit it. The policy is the calling thread's (Linux), so the
-recorder and the console, started before, keep normal scheduling; it is given back when the
-run ends (:func:`restore_scheduling`), so what follows (the reference simulation, the report)
-never runs at real-time priority. docs/SAFETY.md, "Real-time priority and the host", says what
+not, with one line saying how to permit it. The policy is per thread (Linux); the process's other
+threads (the recorder, the rig's journal), which share the interpreter's lock, go to
+:data:`LOCK_SHARER_PRIORITY` so that ordinary load cannot preempt them while they hold it. All is
+given back when the run ends (:func:`restore_scheduling`), so what follows (the reference
+simulation, the report) never runs at real-time priority. docs/SAFETY.md, "Real-time priority and the host", says what
 keeps a real-time loop from starving the machine.
 """
 
@@ -22,6 +23,7 @@ import ctypes
 import ctypes.util
 import gc
 import os
+import threading
 from dataclasses import dataclass, field
 from typing import Final, Literal
 
@@ -37,6 +39,12 @@ AUTO: Final = "auto"
 AUTO_LOOP_PRIORITY = 80
 #: The virtual rig's process under ``auto``: one below the loop, which wins a shared core.
 AUTO_RIG_PRIORITY = 79
+#: The other threads of a process whose thread takes SCHED_FIFO: they share its interpreter lock,
+#: and one that ordinary load preempts while it holds the lock stalls the real-time thread for a
+#: time slice (priority inversion through the lock: 6-23 ms gaps on a machine with every core busy,
+#: benchmarks/README.md). At the lowest real-time priority ordinary load cannot preempt them, and
+#: the real-time thread still can.
+LOCK_SHARER_PRIORITY = 1
 #: How to permit SCHED_FIFO, for the line said when it was not permitted.
 HOW_TO_PERMIT = (
     "to permit it: run as root, or give the interpreter CAP_SYS_NICE (sudo setcap cap_sys_nice+ep "
@@ -73,6 +81,9 @@ class Scheduling:
         One line for the console and ``metadata.json``; "" when nothing was asked.
     previous : tuple of (int, int)
         The thread's policy and priority before, given back by :func:`restore_scheduling`.
+    sharers : list of (int, int, int)
+        The process's other threads raised to :data:`LOCK_SHARER_PRIORITY`: native id, policy and
+        priority before.
     """
 
     asked: int | str = 0
@@ -80,6 +91,7 @@ class Scheduling:
     granted: bool = False
     line: str = ""
     previous: tuple[int, int] = (0, 0)
+    sharers: list[tuple[int, int, int]] = field(default_factory=list)
 
     def as_dict(self) -> dict:
         """For ``metadata.json``: asked, the policy in effect and its priority."""
@@ -114,14 +126,42 @@ def request_fifo(asked: int | str, auto_priority: int = AUTO_LOOP_PRIORITY, what
             line = (f"{label}: refused ({reason}); run as root or grant CAP_SYS_NICE or an rtprio limit "
                     "(/etc/security/limits.conf); running with normal scheduling")
         return Scheduling(asked, priority, False, line, previous)
-    return Scheduling(asked, priority, True, f"{label}: granted", previous)
+    sharers = _raise_lock_sharers()
+    note = f"; {len(sharers)} other thread(s) of the process at priority {LOCK_SHARER_PRIORITY}" if sharers else ""
+    return Scheduling(asked, priority, True, f"{label}: granted{note}", previous, sharers)
+
+
+def _raise_lock_sharers() -> list[tuple[int, int, int]]:
+    """Put the process's other normal threads at :data:`LOCK_SHARER_PRIORITY`; what they had before."""
+    me = threading.get_native_id()
+    raised = []
+    for thread in threading.enumerate():
+        tid = thread.native_id
+        if tid is None or tid == me:
+            continue
+        try:
+            policy = os.sched_getscheduler(tid)
+            if policy == os.SCHED_FIFO:
+                continue  # a real-time thread of its own (the in-process rig's): leave it
+            before = os.sched_getparam(tid).sched_priority
+            os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(LOCK_SHARER_PRIORITY))
+        except OSError:
+            continue  # gone, or not ours to change: it keeps what it had
+        raised.append((tid, policy, before))
+    return raised
 
 
 def restore_scheduling(scheduling: Scheduling) -> None:
-    """Give the calling thread back the policy it had before :func:`request_fifo` (if that granted one)."""
+    """Give the calling thread, and the threads raised with it, back the policy they had before :func:`request_fifo`."""
     if scheduling.granted:
         policy, priority = scheduling.previous
         os.sched_setscheduler(0, policy, os.sched_param(priority))
+        for tid, sharer_policy, sharer_priority in scheduling.sharers:
+            try:
+                os.sched_setscheduler(tid, sharer_policy, os.sched_param(sharer_priority))
+            except OSError:
+                pass  # the thread has ended
+        scheduling.sharers.clear()
         scheduling.granted = False
 
 

@@ -27,19 +27,22 @@ class FakeScheduler:
         self.permitted = permitted
         self.policy, self.priority = os.SCHED_OTHER, 0
         self.calls: list[tuple[int, int]] = []
+        self.others: dict[int, tuple[int, int]] = {}
 
     def setscheduler(self, pid: int, policy: int, param) -> None:
-        assert pid == 0  # the calling thread only: the recorder and the console keep theirs
         if policy == os.SCHED_FIFO and not self.permitted:
             raise PermissionError(1, "Operation not permitted")
+        if pid != 0:  # another thread of the process (a lock sharer)
+            self.others[pid] = (policy, param.sched_priority)
+            return
         self.calls.append((policy, param.sched_priority))
         self.policy, self.priority = policy, param.sched_priority
 
     def getscheduler(self, pid: int) -> int:
-        return self.policy
+        return self.others.get(pid, (os.SCHED_OTHER, 0))[0] if pid else self.policy
 
     def getparam(self, pid: int):
-        return os.sched_param(self.priority)
+        return os.sched_param(self.others.get(pid, (os.SCHED_OTHER, 0))[1] if pid else self.priority)
 
 
 @pytest.fixture
@@ -64,7 +67,7 @@ def test_auto_takes_fifo_where_permitted_and_gives_it_back(fake):
     scheduling = request_fifo(AUTO)
     assert scheduling.granted and scheduling.priority == AUTO_LOOP_PRIORITY
     assert (scheduler.policy, scheduler.priority) == (os.SCHED_FIFO, AUTO_LOOP_PRIORITY)
-    assert scheduling.line == f"SCHED_FIFO priority {AUTO_LOOP_PRIORITY} for the loop (auto): granted"
+    assert scheduling.line.startswith(f"SCHED_FIFO priority {AUTO_LOOP_PRIORITY} for the loop (auto): granted")
     assert scheduling.as_dict() == {"asked": "auto", "policy": "SCHED_FIFO", "priority": AUTO_LOOP_PRIORITY}
     restore_scheduling(scheduling)
     assert (scheduler.policy, scheduler.priority) == (os.SCHED_OTHER, 0)
@@ -101,7 +104,7 @@ def test_zero_asks_nothing_and_says_nothing(fake):
 def test_apply_realtime_gives_back_only_what_it_asked_for(fake):
     scheduler = fake(permitted=True)
     report = apply_realtime(RealtimeConfig(fifo_priority=AUTO, disable_gc=False))
-    assert report.lines == [f"SCHED_FIFO priority {AUTO_LOOP_PRIORITY} for the loop (auto): granted"]
+    assert report.lines[0].startswith(f"SCHED_FIFO priority {AUTO_LOOP_PRIORITY} for the loop (auto): granted")
     restore_realtime(report)
     assert scheduler.policy == os.SCHED_OTHER
     made_before = request_fifo(AUTO)  # the session asks before its pre-flight check, and gives it back itself
@@ -163,5 +166,26 @@ def test_the_rig_thread_runs_fifo_in_real_time_and_normal_in_lockstep(fake):
     lockstep = [policy for lockstep, policy in rig.seen if lockstep]
     assert real_time and set(real_time) == {os.SCHED_FIFO}
     assert lockstep and set(lockstep) == {os.SCHED_OTHER}
-    assert rig.scheduling_line.endswith("(auto): granted") and f"priority {AUTO_RIG_PRIORITY}" in rig.scheduling_line
+    assert "(auto): granted" in rig.scheduling_line and f"priority {AUTO_RIG_PRIORITY}" in rig.scheduling_line
     assert scheduler.policy == os.SCHED_OTHER  # given back when the thread ends
+
+
+def test_the_other_threads_of_the_process_go_to_the_lowest_real_time_priority_and_come_back(fake):
+    """They share the interpreter's lock: preempted by ordinary load while holding it, they would stall the loop."""
+    import threading
+
+    from harness.realtime.host import LOCK_SHARER_PRIORITY
+
+    scheduler = fake(permitted=True)
+    release = threading.Event()
+    sharer = threading.Thread(target=release.wait, name="recorder-like", daemon=True)
+    sharer.start()
+    try:
+        scheduling = request_fifo(AUTO)
+        assert scheduler.others[sharer.native_id] == (os.SCHED_FIFO, LOCK_SHARER_PRIORITY)
+        assert "other thread(s) of the process at priority 1" in scheduling.line
+        restore_scheduling(scheduling)
+        assert scheduler.others[sharer.native_id] == (os.SCHED_OTHER, 0)
+    finally:
+        release.set()
+        sharer.join()
