@@ -92,12 +92,27 @@ def test_a_rig_that_sends_steadily_leaves_the_verdict_to_the_loop():
     assert timing.as_dict()["rig_frame_age_max_s"] == timing.rig_age_max_s
 
 
-def test_a_rig_not_scheduled_for_22_ms_is_marginal_though_the_loop_is_on_time():
+def test_a_rig_not_scheduled_for_22_ms_is_refused_though_the_loop_is_on_time():
+    """The issue's case: that gap would have tripped sensor_stale; a 30 s run holds thirty such seconds."""
     clock = LateClock(0.0, 10**9)  # the loop itself is on time: its own verdict would be ok
     timing = _watch(Rig(clock, silent=[(0.5, 0.522)]), clock)
     assert timing.p99_s < 1e-4
     assert timing.rig_age_max_s == pytest.approx(0.024, abs=0.003)
+    assert timing.verdict == "refused"
+
+
+def test_a_rig_gap_between_half_the_limit_and_the_limit_is_marginal():
+    clock = LateClock(0.0, 10**9)
+    timing = _watch(Rig(clock, silent=[(0.5, 0.512)]), clock)  # ages up to 14 ms against 20 ms
+    assert 0.01 < timing.rig_age_max_s < 0.02
     assert timing.verdict == "marginal"
+    timing.check()
+
+
+def test_one_wakeup_later_than_the_budget_is_refused():
+    timing = _measure(0.025, every=400)  # one 25 ms stall in the second: the run would trip there
+    assert timing.p99_s < BUDGET_S < timing.max_s
+    assert timing.verdict == "refused"
 
 
 def test_a_rig_that_is_often_late_is_refused_before_anything_moves():
