@@ -7,8 +7,10 @@ and a run on the real rig all get the same design from the same profile.
 from __future__ import annotations
 
 from harness.control.actuator_aware import ActuatorModel
+from harness.control.compensation import Compensator, NoCompensation
 from harness.control.controllers import Controller
 from harness.control.designs import OutputActuatorDesign, StateFeedbackActuatorDesign, build_controller
+from harness.control.model_compensation import ModelCompensator
 from harness.errors import ModelError, ProfileError
 from harness.profile import Profile
 
@@ -84,3 +86,36 @@ def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale
             profile.source_path, "control.controller",
         )
     return controller
+
+
+def make_compensator(profile: Profile, method: str | None = None) -> Compensator:
+    """The force-tracking compensator ``method`` (default ``control.compensation``) of ``profile``.
+
+    The model-based compensator takes ``k_h`` and ``w_f`` from ``rig.actuator`` (or its
+    identified overlay) through :class:`ActuatorModel`, as the actuator-aware designs do.
+
+    Raises
+    ------
+    ProfileError
+        If ``rig.actuator`` is not a model the compensator can invert, or if the load-cell
+        correction's bound is not below ``safety.force.tracking_tolerance_N`` (the tracking check
+        must still see an actuator the correction cannot pull back: docs/SAFETY.md,
+        "Force-tracking compensation").
+    """
+    method = profile.control.compensation if method is None else method
+    if method == "none":
+        return NoCompensation()
+    if method != "model":
+        raise ProfileError(f"unknown compensation {method!r}; expected none or model", profile.source_path,
+                           "control.compensation")
+    settings = profile.control.compensator.model
+    tolerance_N = profile.safety.force.tracking_tolerance_N
+    if not settings.correction_limit_N < tolerance_N:
+        raise ProfileError(
+            f"found {settings.correction_limit_N:g} N, expected below safety.force.tracking_tolerance_N = {tolerance_N:g} N",
+            profile.source_path, "control.compensator.model.correction_limit_N",
+        )
+    try:
+        return ModelCompensator(ActuatorModel.from_rig_actuator(profile.rig.actuator), settings)
+    except ModelError as err:
+        raise ProfileError(str(err), profile.source_path, "control.compensation") from err

@@ -54,6 +54,7 @@ class StudyResult:
                 "friction_source": self.settings.friction_source,
                 "design_stiffness_scale": self.design_stiffness_scale,
                 "rig_effects": self.rig_effects,
+                "compensation": controlled.extra.get("compensation", "none"),
                 "controller_state": controlled.extra.get("state_source", "measured" if self.rig_effects else "model"),
             },
             "total_weight_N": self.profile.structure.total_weight_N,
@@ -98,6 +99,12 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
             f"controller {name!r} is designed with the rig's actuator (its force a state, read from the load cell); "
             "the ideal simulation has no actuator: run it with --rig-effects",
             profile.source_path, "control.controller",
+        )
+    if name != NO_CONTROLLER and profile.control.compensation != "none" and not options.rig_effects:
+        raise ProfileError(
+            f"compensation {profile.control.compensation!r} shapes the command of the rig's actuator; the ideal simulation "
+            "has no actuator: run it with --rig-effects (or --set control.compensation=none)",
+            profile.source_path, "control.compensation",
         )
     controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
     table = TableMotion.from_motion(motion)

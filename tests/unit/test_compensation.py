@@ -1,0 +1,270 @@
+"""Force-tracking compensation (harness/control/compensation.py, model_compensation.py) and compensation_fault.
+
+The model-based compensator on a known plant: the first-order actuator model (C1),
+``udot = w_f (u_c - u) - k_h xdot_b``, stepped exactly with the command held over each
+period. Without compensation a constant sliding velocity leaves a force deficit of
+``(k_h / w_f) xdot_b``; the flow term cancels it, the load-cell correction takes out a model
+error within its bound and pins at it beyond. The supervisor's ``compensation_fault`` check
+trips on a pinned or non-finite compensator; the loop's tick and the rig twin run the
+compensator between the controller and the supervisor, so the clamp bounds the compensated
+command.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from drivers.measurements import Measurements
+from harness.control.actuator_aware import ActuatorModel
+from harness.control.compensation import ModelCompensationConfig, NoCompensation
+from harness.control.factory import build_controller_for_rig, make_compensator
+from harness.control.model_compensation import ModelCompensator
+from harness.errors import ModelError, ProfileError
+from harness.profile import load_profile
+from harness.runs.options import StudyOptions, prepare_motion
+from harness.runs.simulate import run_study
+from harness.safety.actuator_detectors import CompensationFault
+from harness.safety.config import ForceConfig
+from harness.safety.health import TickHealth
+from harness.safety.lifecycle import State
+from harness.simulation.twin import run_rig_twin
+from tests.unit.test_control_tick import PERIOD_S, Bench
+
+#: The shipped rig's actuator (profiles/nceer_4dof.yaml): k_h = 11.8 MN/m, w_f = 2 pi 20 Hz.
+ACTUATOR = ActuatorModel(11.8e6, 2.0 * math.pi * 20.0)
+DT = 0.002
+
+
+class FirstOrderActuator:
+    """The known plant (C1), stepped exactly over ``dt`` with the command and the velocity held."""
+
+    def __init__(self, model: ActuatorModel) -> None:
+        self.model = model
+        self.force_N = 0.0
+
+    def step(self, command_N: float, sliding_velocity_m_s: float, dt: float) -> float:
+        decay = math.exp(-self.model.bandwidth_rad_s * dt)
+        target = command_N - self.model.loop_damping_Ns_per_m * sliding_velocity_m_s
+        self.force_N = decay * self.force_N + (1.0 - decay) * target
+        return self.force_N
+
+
+def _run(compensator, plant: FirstOrderActuator, force_N, velocity_m_s: float, seconds: float):
+    """Drive ``plant`` through ``compensator`` for ``seconds``; (reference-free) forces per tick."""
+    meas = Measurements()
+    meas.set(0.0, 0.0, 0.0, velocity_m_s)  # table at rest, the base mat sliding at velocity_m_s
+    applied = 0.0
+    forces, targets = [], []
+    for k in range(int(round(seconds / DT))):
+        t = k * DT
+        meas.actuator_force_N = plant.force_N
+        target = force_N(t) if callable(force_N) else force_N
+        applied = compensator.update(t, DT, target, meas, applied)
+        plant.step(applied, velocity_m_s, DT)
+        forces.append(plant.force_N)
+        targets.append(target)
+    return np.array(forces), np.array(targets)
+
+
+def test_the_model_compensator_cancels_a_constant_velocity_force_bleed() -> None:
+    velocity, wanted = 0.1, 2_000.0
+    bleed = ACTUATOR.loop_damping_Ns_per_m * velocity  # 9.4 kN at 0.1 m/s
+    uncompensated, _ = _run(NoCompensation(), FirstOrderActuator(ACTUATOR), wanted, velocity, 0.5)
+    assert uncompensated[-1] == pytest.approx(wanted - bleed, rel=1e-6)  # the deficit without compensation
+    compensated, _ = _run(ModelCompensator(ACTUATOR, ModelCompensationConfig()), FirstOrderActuator(ACTUATOR),
+                          wanted, velocity, 0.5)
+    assert abs(compensated[-1] - wanted) < 1.0
+    assert abs(compensated[-1] - wanted) < 1e-3 * bleed
+
+
+def test_the_flow_term_alone_cancels_the_bleed_without_the_load_cell() -> None:
+    settings = ModelCompensationConfig(correction_rate_per_s=0.0)
+    compensated, _ = _run(ModelCompensator(ACTUATOR, settings), FirstOrderActuator(ACTUATOR), 2_000.0, -0.12, 0.5)
+    assert abs(compensated[-1] - 2_000.0) < 1.0
+
+
+def test_the_inverse_dynamics_make_the_force_follow_the_reference_not_the_actuators_lag() -> None:
+    settings = ModelCompensationConfig(correction_rate_per_s=0.0)
+    step = lambda t: 0.0 if t < 0.01 else 3_000.0  # noqa: E731
+    compensator = ModelCompensator(ACTUATOR, settings)
+    compensated, _ = _run(compensator, FirstOrderActuator(ACTUATOR), step, 0.0, 0.1)
+    uncompensated, _ = _run(NoCompensation(), FirstOrderActuator(ACTUATOR), step, 0.0, 0.1)
+    # the reference: the step through the 4 ms lag of (C2), sampled as the compensator steps it
+    times = np.arange(compensated.size) * DT
+    reference = np.where(times < 0.01, 0.0, 3_000.0 * (1.0 - np.exp(-(times - 0.01 + DT) / settings.reference_time_constant_s)))
+    k = int(round(0.018 / DT))  # 1 / w_f = 8 ms after the step
+    assert compensated[k] > 0.85 * 3_000.0  # the compensated force is nearly there after one actuator lag
+    assert uncompensated[k] < 0.75 * 3_000.0  # the bare actuator is still on its way (1 - 1/e of it)
+    # within a sample's hold of the reference; the bare actuator lags it by a fifth of the step and more
+    assert np.max(np.abs(compensated - reference)) < 0.06 * 3_000.0 < 0.2 * 3_000.0 < np.max(np.abs(uncompensated - reference))
+
+
+def test_the_correction_takes_out_a_model_error_within_its_bound() -> None:
+    plant = FirstOrderActuator(ACTUATOR.scaled(stiffness=1.08))  # the rig's k_h is 8 % above the model's
+    compensator = ModelCompensator(ACTUATOR, ModelCompensationConfig())
+    forces, _ = _run(compensator, plant, 2_000.0, 0.1, 2.0)
+    missing = 0.08 * ACTUATOR.loop_damping_Ns_per_m * 0.1  # 750 N the flow term leaves
+    assert abs(forces[-1] - 2_000.0) < 5.0
+    assert compensator.correction_N == pytest.approx(missing, rel=0.01)
+    assert not compensator.pinned
+
+
+def test_a_model_error_beyond_the_bound_pins_the_correction_at_it() -> None:
+    plant = FirstOrderActuator(ACTUATOR.scaled(stiffness=1.2))  # 1.9 kN missing, the bound is 1 kN
+    compensator = ModelCompensator(ACTUATOR, ModelCompensationConfig())
+    forces, _ = _run(compensator, plant, 2_000.0, 0.1, 2.0)
+    assert compensator.correction_N == 1_000.0
+    assert compensator.pinned and compensator.bound_value == 1_000.0
+    assert forces[-1] == pytest.approx(2_000.0 - (0.2 * ACTUATOR.loop_damping_Ns_per_m * 0.1 - 1_000.0), rel=1e-3)
+
+
+def test_the_correction_does_not_wind_up_while_the_supervisor_changes_the_command() -> None:
+    compensator = ModelCompensator(ACTUATOR, ModelCompensationConfig())
+    meas = Measurements()
+    meas.actuator_force_N = 0.0  # the actuator gives nothing: a large error
+    compensator.update(0.0, DT, 5_000.0, meas, 0.0)
+    for k in range(1, 200):  # the supervisor sends less than asked (a clamp, a ramp) on every tick
+        compensator.update(k * DT, DT, 5_000.0, meas, compensator.command_N - 100.0)
+    assert compensator.correction_N == 0.0
+    compensator.update(200 * DT, DT, 5_000.0, meas, compensator.command_N)  # sent as computed: it integrates
+    assert compensator.correction_N > 0.0
+
+
+def test_a_non_finite_force_gives_a_non_finite_command_and_keeps_the_state() -> None:
+    compensator = ModelCompensator(ACTUATOR, ModelCompensationConfig())
+    meas = Measurements()
+    compensator.update(0.0, DT, 1_000.0, meas, 0.0)
+    reference = compensator.reference_N
+    assert math.isnan(compensator.update(DT, DT, math.nan, meas, 0.0))
+    assert compensator.reference_N == reference and not compensator.diverged
+
+
+def test_a_correction_gain_above_a_quarter_of_the_bandwidth_is_refused() -> None:
+    with pytest.raises(ModelError, match="w_f / 4"):
+        ModelCompensator(ACTUATOR, ModelCompensationConfig(correction_rate_per_s=40.0))
+
+
+# ---------------------------------------------------------------- the profile key
+def test_the_profile_key_builds_each_method_and_none_is_the_default() -> None:
+    assert isinstance(make_compensator(load_profile(None)), NoCompensation)
+    compensator = make_compensator(load_profile(None, overrides=["control.compensation=model"]))
+    assert isinstance(compensator, ModelCompensator)
+    assert compensator.actuator.loop_damping_Ns_per_m == pytest.approx(94_000.0, rel=0.01)  # rig.actuator's
+    with pytest.raises(ProfileError, match="control.compensation"):
+        load_profile(None, overrides=["control.compensation=magic"])
+
+
+def test_a_correction_bound_not_below_the_tracking_tolerance_is_refused() -> None:
+    profile = load_profile(None, overrides=["control.compensation=model", "control.compensator.model.correction_limit_N=1500"])
+    with pytest.raises(ProfileError, match="tracking_tolerance_N"):
+        make_compensator(profile)
+
+
+def test_the_ideal_simulation_refuses_a_compensation() -> None:
+    profile = load_profile(None, overrides=["control.compensation=model", "record.duration_s=2"])
+    with pytest.raises(ProfileError, match="--rig-effects"):
+        run_study(profile, StudyOptions())
+
+
+# ---------------------------------------------------------------- compensation_fault
+def test_compensation_fault_at_and_around_tracking_time() -> None:
+    detector = CompensationFault(ForceConfig(tracking_time_s=0.1))
+    health = TickHealth()
+    health.compensation_pinned, health.compensation_value = True, 1_000.0
+    fired = [detector.update(k * DT, DT, health) for k in range(52)]
+    assert not any(fired[:50]) and fired[50]  # 0.1 s after the first pinned tick, not before
+    health.compensation_pinned = False
+    assert not detector.update(52 * DT, DT, health)
+    health.compensation_pinned = True  # pinned again: the time starts afresh
+    assert not any(detector.update(k * DT, DT, health) for k in range(53, 103))
+    assert detector.update(103 * DT, DT, health)
+    assert "1000" in detector.detail(health) and detector.present(health) == ""
+
+
+def test_compensation_fault_trips_at_once_on_a_state_not_finite() -> None:
+    detector = CompensationFault(ForceConfig())
+    health = TickHealth()
+    assert not detector.update(0.0, DT, health)
+    health.compensation_diverged, health.compensation_value = True, math.inf
+    assert detector.update(DT, DT, health)
+    assert "not finite" in detector.present(health)  # a reset is refused while it lasts
+
+
+class _Pinning:
+    """A compensator that passes the force through and reports a parameter pinned from ``pin_at`` on."""
+
+    name = "test"
+
+    def __init__(self, pin_at_s: float) -> None:
+        self.pin_at_s = pin_at_s
+        self.command_N, self.pinned, self.diverged, self.bound_value = 0.0, False, False, 0.0
+
+    def reset(self) -> None:
+        self.pinned = False
+
+    def update(self, t, dt, force_N, meas, applied_N):
+        self.pinned = t >= self.pin_at_s
+        self.bound_value = 7.0 if self.pinned else 0.0
+        self.command_N = force_N
+        return force_N
+
+
+@pytest.fixture
+def bench():
+    benches: list[Bench] = []
+
+    def make() -> Bench:
+        b = Bench()
+        benches.append(b)
+        return b
+
+    yield make
+    for b in benches:
+        b.close()
+
+
+def test_the_tick_hands_the_compensators_flags_to_the_supervisor(bench) -> None:
+    b = bench()
+    b.tick.compensator = _Pinning(pin_at_s=math.inf)
+    b.run_until_running()
+    b.tick.compensator.pin_at_s = b.t
+    pinned_from = b.t
+    while True:
+        command, sent = b.step()
+        if command.state is State.TRIPPED:
+            break
+        assert sent[0] and b.t - pinned_from < 0.1 + 2 * PERIOD_S
+    assert command.trip_reason == "compensation_fault" and sent == (False, 0.0)
+    assert b.t - pinned_from == pytest.approx(0.1 + PERIOD_S, abs=1e-9)  # tracking_time_s after the first pinned tick
+
+
+def test_the_supervisor_clamps_the_compensated_command_not_the_controllers_force(bench) -> None:
+    b = bench()
+    profile = load_profile(None, overrides=["control.compensation=model"])
+    b.tick.compensator = make_compensator(profile)
+    b.controller.force_N = 9_000.0  # below the 10 kN limit, but not with the flow term added
+    b.run_until_running()
+    b.v_b = 0.05  # the flow term: 4.7 kN
+    for _ in range(60):
+        b.x_b += b.v_b * PERIOD_S
+        command, sent = b.step()
+    assert b.tick.compensator.command_N > 13_000.0
+    assert command.state is State.RUNNING
+    assert command.force_N == profile.safety.force.max_force_N and sent == (True, pytest.approx(10_000.0, abs=1.0))
+
+
+def test_a_compensator_on_the_wrong_actuator_model_trips_compensation_fault_and_force_tracking_stays_quiet() -> None:
+    profile = load_profile(None, overrides=["record.duration_s=10"])
+    motion = prepare_motion(profile)
+    wrong = ActuatorModel.from_rig_actuator(profile.rig.actuator).scaled(stiffness=0.5)  # half the rig's k_h
+    compensator = ModelCompensator(wrong, profile.control.compensator.model)
+    result = run_rig_twin(profile, motion, profile.control.rate_hz, build_controller_for_rig(profile, "phi"),
+                          compensator=compensator)
+    assert result.extra["outcome"] == "tripped" and result.extra["trip_reason"] == "compensation_fault"
+    # the same run with the rig's own model completes: the trip is the model's error, not the record's
+    right = make_compensator(load_profile(None, overrides=["record.duration_s=10", "control.compensation=model"]))
+    healthy = run_rig_twin(profile, motion, profile.control.rate_hz, build_controller_for_rig(profile, "phi"), compensator=right)
+    assert healthy.extra["outcome"] == "completed" and healthy.extra["compensation"] == "model"
