@@ -12,7 +12,10 @@ command ``u_c`` so that the load cell's ``u`` follows ``f_d``:
 
 - ``none`` (:class:`NoCompensation`): ``u_c = f_d``, the harness before compensation;
 - ``model`` (:class:`harness.control.model_compensation.ModelCompensator`): the inverse of
-  (C1) on the profile's (or identified) actuator model, a flow term and a load-cell correction.
+  (C1) on the profile's (or identified) actuator model, a flow term and a load-cell correction;
+- ``adaptive`` (:class:`harness.control.adaptive_compensation.AdaptiveCompensator`): the
+  adaptive time-series compensator of Chae, Kazemibidokhti & Ricles (2013), its coefficients
+  fitted online over a moving window, within stated bounds.
 
 The compensator's command is the supervisor's input: the force clamp, the rate limit, the
 stroke fade, the stopping ramp and every interlock act on it exactly as on a controller's force
@@ -34,8 +37,8 @@ from drivers.measurements import Measurements
 from harness.config.schema import quantity
 
 #: The methods of ``control.compensation``.
-CompensationName = Literal["none", "model"]
-COMPENSATION_NAMES: tuple[str, ...] = ("none", "model")
+CompensationName = Literal["none", "model", "adaptive"]
+COMPENSATION_NAMES: tuple[str, ...] = ("none", "model", "adaptive")
 
 #: A command the supervisor sent within this of the compensator's own (N) went out unchanged:
 #: no clamp, ramp, rate limit or fade acted on it (the command frame's resolution is coarser).
@@ -63,10 +66,51 @@ class ModelCompensationConfig:
 
 
 @dataclass(frozen=True)
+class AdaptiveCompensationConfig:
+    """Settings of the adaptive time-series compensator (``control.compensator.adaptive``).
+
+    The command is ``u_c = a0 r + a1 r' + a2 xdot_b``; the bounds state the range of actuators
+    it may adapt to (harness/control/adaptive_compensation.py derives the defaults).
+    """
+
+    reference_time_constant_s: float = quantity(
+        0.004, unit="s", gt=0.0, le=0.1, doc="tau_r: the force is made to follow f_d through a first-order lag of tau_r",
+    )
+    window_s: float = quantity(2.0, unit="s", gt=0.0, le=10.0, doc="length of the moving window the coefficients are fitted over")
+    filter_time_constant_s: float = quantity(
+        0.01, unit="s", gt=0.0, le=0.1, doc="tau_f of the low-pass applied alike to every signal of the fit",
+    )
+    min_excitation: float = quantity(
+        1.0e-3, gt=0.0, lt=1.0, doc="smallest normalized determinant of the window's normal matrix for a new fit",
+    )
+    gain_bounds: tuple[float, ...] = quantity(
+        (0.8, 1.25), gt=0.0, min_len=2, doc="[low, high] of a0, the static gain of the force loop's inverse",
+    )
+    lead_bounds_s: tuple[float, ...] = quantity(
+        (0.0, 0.02), unit="s", ge=0.0, min_len=2, doc="[low, high] of a1, the inverse's lead (1 / w_f and the delays)",
+    )
+    flow_bounds_Ns_per_m: tuple[float, ...] = quantity(
+        (0.0, 200_000.0), unit="N*s/m", ge=0.0, min_len=2, doc="[low, high] of a2, the flow term's gain (k_h / w_f)",
+    )
+
+    def __post_init__(self) -> None:
+        for name in ("gain_bounds", "lead_bounds_s", "flow_bounds_Ns_per_m"):
+            bounds = getattr(self, name)
+            if len(bounds) != 2 or not bounds[0] < bounds[1]:
+                raise ValueError(f"{name} must be [low, high] with low < high, found {list(bounds)}")
+        if not self.gain_bounds[0] <= 1.0 <= self.gain_bounds[1]:
+            raise ValueError(f"gain_bounds must hold 1 (the start: the command is the force), found {list(self.gain_bounds)}")
+        if self.window_s < 10.0 * self.filter_time_constant_s:
+            raise ValueError(f"window_s ({self.window_s:g} s) must be at least 10 filter time constants "
+                             f"({10.0 * self.filter_time_constant_s:g} s)")
+
+
+@dataclass(frozen=True)
 class CompensatorSettings:
     """Settings of each compensation method (``control.compensator``)."""
 
     model: ModelCompensationConfig = field(default_factory=ModelCompensationConfig)
+    adaptive: AdaptiveCompensationConfig = field(default_factory=AdaptiveCompensationConfig)
 
 
 class Compensator(Protocol):

@@ -7,6 +7,7 @@ and a run on the real rig all get the same design from the same profile.
 from __future__ import annotations
 
 from harness.control.actuator_aware import ActuatorModel
+from harness.control.adaptive_compensation import AdaptiveCompensator
 from harness.control.compensation import Compensator, NoCompensation
 from harness.control.controllers import Controller
 from harness.control.designs import OutputActuatorDesign, StateFeedbackActuatorDesign, build_controller
@@ -91,8 +92,10 @@ def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale
 def make_compensator(profile: Profile, method: str | None = None) -> Compensator:
     """The force-tracking compensator ``method`` (default ``control.compensation``) of ``profile``.
 
-    The model-based compensator takes ``k_h`` and ``w_f`` from ``rig.actuator`` (or its
-    identified overlay) through :class:`ActuatorModel`, as the actuator-aware designs do.
+    The adaptive compensator fits its coefficients online within ``control.compensator.adaptive``'s
+    bounds, its window sized at ``control.rate_hz``. The model-based compensator takes ``k_h`` and
+    ``w_f`` from ``rig.actuator`` (or its identified overlay) through :class:`ActuatorModel`, as
+    the actuator-aware designs do.
 
     Raises
     ------
@@ -105,8 +108,10 @@ def make_compensator(profile: Profile, method: str | None = None) -> Compensator
     method = profile.control.compensation if method is None else method
     if method == "none":
         return NoCompensation()
+    if method == "adaptive":
+        return AdaptiveCompensator(profile.control.compensator.adaptive, 1.0 / profile.control.rate_hz)
     if method != "model":
-        raise ProfileError(f"unknown compensation {method!r}; expected none or model", profile.source_path,
+        raise ProfileError(f"unknown compensation {method!r}; expected none, model or adaptive", profile.source_path,
                            "control.compensation")
     settings = profile.control.compensator.model
     tolerance_N = profile.safety.force.tracking_tolerance_N

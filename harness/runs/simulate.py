@@ -21,6 +21,8 @@ from harness.profile import Profile
 from harness.recording import strict_json
 from harness.rig.truth import TruthDifference, truth_metadata
 from harness.runs.options import NO_CONTROLLER, StudyOptions, prepare_motion, resolve_profile
+from harness.signals.columns import FORCE_COMMAND, FORCE_RAW
+from harness.signals.force_tracking import force_tracking_rms_N
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 
 
@@ -59,8 +61,15 @@ class StudyResult:
             },
             "total_weight_N": self.profile.structure.total_weight_N,
             "cases": {"passive": self.cases["passive"].peaks.as_json(), "controlled": controlled.peaks.as_json()},
+            **({"force_tracking_rms_N": self.force_tracking_rms_N()} if self.rig_effects and "controlled" in self.cases else {}),
             **truth_metadata(self.truth_differences()),
         }
+
+    def force_tracking_rms_N(self) -> dict[str, float]:
+        """The controlled case's force-tracking RMS errors (N): load cell against the controller's force and the command."""
+        columns = self.cases["controlled"].columns
+        return {"controller_force": force_tracking_rms_N(columns, FORCE_RAW),
+                "command": force_tracking_rms_N(columns, FORCE_COMMAND)}
 
     def write_json(self, path: str | Path) -> None:
         """Write :meth:`to_json` to ``path``."""

@@ -13,13 +13,15 @@ command.
 from __future__ import annotations
 
 import math
+import tracemalloc
 
 import numpy as np
 import pytest
 
 from drivers.measurements import Measurements
 from harness.control.actuator_aware import ActuatorModel
-from harness.control.compensation import ModelCompensationConfig, NoCompensation
+from harness.control.adaptive_compensation import AdaptiveCompensator, solve_normalized
+from harness.control.compensation import AdaptiveCompensationConfig, ModelCompensationConfig, NoCompensation
 from harness.control.factory import build_controller_for_rig, make_compensator
 from harness.control.model_compensation import ModelCompensator
 from harness.errors import ModelError, ProfileError
@@ -268,3 +270,120 @@ def test_a_compensator_on_the_wrong_actuator_model_trips_compensation_fault_and_
     right = make_compensator(load_profile(None, overrides=["record.duration_s=10", "control.compensation=model"]))
     healthy = run_rig_twin(profile, motion, profile.control.rate_hz, build_controller_for_rig(profile, "phi"), compensator=right)
     assert healthy.extra["outcome"] == "completed" and healthy.extra["compensation"] == "model"
+
+
+# ---------------------------------------------------------------- the adaptive compensator
+def _excite(compensator, plant: FirstOrderActuator, seconds: float, period_s: float = DT):
+    """Drive ``plant`` through ``compensator`` with a force of two sines and a sliding velocity of a third.
+
+    Returns the coefficients after each tick (n, 3) and the force error against the reference (n,).
+    """
+    meas = Measurements()
+    applied = 0.0
+    history, errors = [], []
+    for k in range(int(round(seconds / period_s))):
+        t = k * period_s
+        velocity = 0.08 * math.sin(2.0 * math.pi * 1.3 * t)
+        meas.set(0.0, 0.0, 0.0, velocity)
+        meas.actuator_force_N = plant.force_N
+        errors.append(plant.force_N - compensator.reference_N)
+        wanted = 2_000.0 * math.sin(2.0 * math.pi * 0.7 * t) + 800.0 * math.sin(2.0 * math.pi * 4.1 * t)
+        applied = compensator.update(t, period_s, wanted, meas, applied)
+        plant.step(applied, velocity, period_s)
+        history.append(tuple(compensator.coefficients))
+    return np.array(history), np.array(errors)
+
+
+def test_the_adaptive_compensator_converges_to_the_inverse_of_a_known_plant_within_its_bounds() -> None:
+    settings = AdaptiveCompensationConfig()
+    compensator = AdaptiveCompensator(settings, DT)
+    history, errors = _excite(compensator, FirstOrderActuator(ACTUATOR), 6.0)
+    a0, a1, a2 = history[-1]
+    assert a0 == pytest.approx(1.0, abs=0.03)  # the continuous relation fitted to a plant held over 2 ms samples
+    assert a1 == pytest.approx(1.0 / ACTUATOR.bandwidth_rad_s, rel=0.15)  # 8 ms, and half a sample's hold
+    assert a2 == pytest.approx(ACTUATOR.loop_damping_Ns_per_m, rel=0.03)  # 94 kN s/m
+    low = (settings.gain_bounds[0], settings.lead_bounds_s[0], settings.flow_bounds_Ns_per_m[0])
+    high = (settings.gain_bounds[1], settings.lead_bounds_s[1], settings.flow_bounds_Ns_per_m[1])
+    assert np.all(history >= low) and np.all(history <= high)  # at every tick, not only at the end
+    assert not compensator.pinned and not compensator.diverged and compensator.fits > 0
+    first, last = errors[: int(0.5 / DT)], errors[-int(1.0 / DT):]
+    rms = lambda x: float(np.sqrt(np.mean(np.square(x))))  # noqa: E731
+    assert rms(last) < 0.1 * rms(first)  # from the bare actuator's error (it starts as none) to a tenth of it
+
+
+def test_the_adaptive_compensator_starts_as_none_and_learns_nothing_at_rest() -> None:
+    compensator = AdaptiveCompensator(AdaptiveCompensationConfig(), DT)
+    meas = Measurements()
+    for k in range(1000):
+        assert compensator.update(k * DT, DT, 0.0, meas, 0.0) == 0.0
+    assert tuple(compensator.coefficients) == (1.0, 0.0, 0.0) and compensator.fits == 0
+    assert compensator.update(1000 * DT, DT, 500.0, meas, 0.0) == pytest.approx(compensator.reference_N)
+
+
+def test_an_actuator_outside_the_stated_bounds_pins_the_adaptation_at_them() -> None:
+    settings = AdaptiveCompensationConfig(flow_bounds_Ns_per_m=(0.0, 50_000.0))  # the plant's 94 kN s/m is outside
+    compensator = AdaptiveCompensator(settings, DT)
+    history, _ = _excite(compensator, FirstOrderActuator(ACTUATOR), 4.0)
+    assert compensator.pinned and history[-1, 2] == 50_000.0
+    assert compensator.bound_value > 50_000.0  # the fit that was refused
+    assert np.all(history[:, 2] <= 50_000.0)
+
+
+def test_the_windows_running_sums_are_the_sums_of_the_samples_it_holds() -> None:
+    compensator = AdaptiveCompensator(AdaptiveCompensationConfig(window_s=0.2), DT)  # 100 samples: wraps 15 times
+    _excite(compensator, FirstOrderActuator(ACTUATOR), 3.0)
+    ring = compensator._ring
+    p, y = ring[:, :3], ring[:, 3]
+    normal, right = p.T @ p, p.T @ y
+    expected = np.array([normal[0, 0], normal[0, 1], normal[0, 2], normal[1, 1], normal[1, 2], normal[2, 2], *right])
+    assert np.allclose(compensator._sums, expected, rtol=1e-9, atol=1e-9 * np.max(np.abs(expected)))
+
+
+def test_solve_normalized_agrees_with_a_direct_solve_and_refuses_collinear_regressors() -> None:
+    rng = np.random.default_rng(3)
+    p = rng.normal(size=(200, 3)) * (1e3, 1e5, 0.1)
+    y = p @ (1.0, 0.008, 94_000.0) + rng.normal(size=200)
+    normal, right = p.T @ p, p.T @ y
+    sums = np.array([normal[0, 0], normal[0, 1], normal[0, 2], normal[1, 1], normal[1, 2], normal[2, 2], *right])
+    assert np.allclose(solve_normalized(sums, 1e-3), np.linalg.solve(normal, right), rtol=1e-9)
+    p[:, 2] = p[:, 0] * 1e-4  # the velocity a copy of the force: nothing tells a0 from a2
+    normal, right = p.T @ p, p.T @ y
+    sums = np.array([normal[0, 0], normal[0, 1], normal[0, 2], normal[1, 1], normal[1, 2], normal[2, 2], *right])
+    assert solve_normalized(sums, 1e-3) is None
+
+
+def test_the_adaptive_compensators_bounds_are_checked() -> None:
+    with pytest.raises(ValueError, match="low < high"):
+        AdaptiveCompensationConfig(lead_bounds_s=(0.02, 0.0))
+    with pytest.raises(ValueError, match="hold 1"):
+        AdaptiveCompensationConfig(gain_bounds=(1.1, 1.5))
+    assert isinstance(make_compensator(load_profile(None, overrides=["control.compensation=adaptive"])), AdaptiveCompensator)
+
+
+def test_the_adaptive_compensator_allocates_nothing_per_tick() -> None:
+    compensator = AdaptiveCompensator(AdaptiveCompensationConfig(), DT)
+    plant = FirstOrderActuator(ACTUATOR)
+    _excite(compensator, plant, 1.5)  # the window is more than half full: every tick fits
+    meas = Measurements()
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        for k in range(2000):
+            meas.base_velocity_m_s = 0.05 * math.sin(k * 0.01)
+            meas.actuator_force_N = plant.force_N
+            plant.step(compensator.update(k * DT, DT, 1_000.0 * math.sin(k * 0.02), meas, compensator.command_N), 0.0, DT)
+        growth = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert growth < 1024
+
+
+def test_a_rig_outside_the_adaptive_bounds_trips_compensation_fault_on_the_twin() -> None:
+    overrides = ["record.duration_s=10", "control.compensation=adaptive",
+                 "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]  # the rig's k_h / w_f is 94 kN s/m
+    profile = load_profile(None, overrides=overrides)
+    result = run_rig_twin(profile, prepare_motion(profile), profile.control.rate_hz, build_controller_for_rig(profile, "phi"))
+    assert result.extra["outcome"] == "tripped" and result.extra["trip_reason"] == "compensation_fault"
+    healthy = load_profile(None, overrides=overrides[:2])
+    result = run_rig_twin(healthy, prepare_motion(healthy), healthy.control.rate_hz, build_controller_for_rig(healthy, "phi"))
+    assert result.extra["outcome"] == "completed" and result.extra["compensation"] == "adaptive"
