@@ -30,7 +30,9 @@ the newest enters). The coefficients are solved for when the window is at least 
 its normalized determinant ``det(D^-1/2 R D^-1/2)`` (1 for uncorrelated regressors, 0 for
 collinear ones; ``D = diag(R)``) is at least ``min_excitation``; otherwise the last ones are
 held (at rest nothing is learnt and nothing is forgotten). They start at ``(1, 0, 0)``, the
-command equal to the force (``none``).
+command equal to the force (``start: none``), or at the model's inverse ``(1, 1 / w_f, k_h / w_f)``
+of ``rig.actuator`` (``start: model``), which spares the run the first half window as ``none``
+and the step when the first fit arrives.
 
 Bounds
 ------
@@ -38,7 +40,9 @@ Each coefficient is held to its stated range (``gain_bounds``, ``lead_bounds_s``
 ``flow_bounds_Ns_per_m``). The defaults: ``a0`` 0.8-1.25 (a proportional force loop on its own
 load cell has a static gain of 1 less its leakage, a few per mille); ``a1`` 0-20 ms (``1 /
 w_f`` is 8 ms on the shipped rig, 1.6-32 ms for the 5-100 Hz a lab tunes, plus 1-2 ms of
-delays); ``a2`` 0-200 kN s/m (twice the shipped rig's ``k_h / w_f``). A fit outside its range
+delays); ``a2`` 0-200 kN s/m (twice the shipped rig's ``k_h / w_f``: the valve's orifice makes
+the bleed grow with the load pressure as ``1 / sqrt(1 - p_L / p_s)``, harmless in (C1) but 1.73
+times at the 10 kN clamp, two thirds of the supply: 163 kN s/m). A fit outside its range
 is clipped to it and reported :attr:`~AdaptiveCompensator.pinned`: the actuator is not one the
 compensator was stated to adapt to, or the adaptation ran away (the supervisor's
 ``compensation_fault`` trips when it lasts ``tracking_time_s``). A solution that is not finite
@@ -54,6 +58,7 @@ import numpy as np
 
 from drivers.measurements import Measurements
 from harness.control.compensation import AdaptiveCompensationConfig
+from harness.errors import ModelError
 
 #: Columns of the window's ring: the three regressors and the filtered command.
 _P0, _P1, _P2, _Y = range(4)
@@ -90,6 +95,9 @@ class AdaptiveCompensator:
     settings : AdaptiveCompensationConfig
     period_s : float
         The loop's period (s): sizes the window's ring (``window_s / period_s`` samples).
+    start : tuple of float, optional
+        ``(a0, a1, a2)`` before the first fit (1, s, N s/m); default ``(1, 0, 0)``, the command
+        equal to the force. Must lie within the bounds.
 
     Attributes
     ----------
@@ -104,10 +112,11 @@ class AdaptiveCompensator:
     __slots__ = (
         "settings", "coefficients", "fits", "reference_N", "command_N", "pinned", "diverged", "bound_value",
         "_ring", "_size", "_head", "_count", "_sums", "_low", "_high", "_tau", "_tau_f", "_u_f", "_v_f", "_y_f",
-        "_primed",
+        "_primed", "_start",
     )
 
-    def __init__(self, settings: AdaptiveCompensationConfig, period_s: float):
+    def __init__(self, settings: AdaptiveCompensationConfig, period_s: float,
+                 start: tuple[float, float, float] = (1.0, 0.0, 0.0)):
         self.settings = settings
         self._size = max(2, int(round(settings.window_s / period_s)))
         self._ring = np.zeros((self._size, 4))
@@ -117,14 +126,18 @@ class AdaptiveCompensator:
         self._high = (settings.gain_bounds[1], settings.lead_bounds_s[1], settings.flow_bounds_Ns_per_m[1])
         self._tau = settings.reference_time_constant_s
         self._tau_f = settings.filter_time_constant_s
+        for i, value in enumerate(start):
+            if not self._low[i] <= value <= self._high[i]:
+                raise ModelError(f"the adaptive compensator's start {start} is outside its bounds {self._low}..{self._high}")
+        self._start = tuple(float(value) for value in start)
         self.reset()
 
     def reset(self) -> None:
-        """Empty window, coefficients ``(1, 0, 0)``, zero reference and filters."""
+        """Empty window, coefficients at their start, zero reference and filters."""
         self._ring[:] = 0.0
         self._sums[:] = 0.0
         self._head = self._count = 0
-        self.coefficients[:] = (1.0, 0.0, 0.0)
+        self.coefficients[:] = self._start
         self.fits = 0
         self.reference_N = self.command_N = self.bound_value = 0.0
         self._u_f = self._v_f = self._y_f = 0.0

@@ -76,6 +76,9 @@ class AdaptiveCompensationConfig:
     reference_time_constant_s: float = quantity(
         0.004, unit="s", gt=0.0, le=0.1, doc="tau_r: the force is made to follow f_d through a first-order lag of tau_r",
     )
+    start: Literal["none", "model"] = field(default="model", metadata={
+        "doc": "the coefficients before the first fit: none (1, 0, 0) or model (1, 1 / w_f, k_h / w_f of rig.actuator)",
+    })
     window_s: float = quantity(2.0, unit="s", gt=0.0, le=10.0, doc="length of the moving window the coefficients are fitted over")
     filter_time_constant_s: float = quantity(
         0.01, unit="s", gt=0.0, le=0.1, doc="tau_f of the low-pass applied alike to every signal of the fit",

@@ -109,7 +109,15 @@ def make_compensator(profile: Profile, method: str | None = None) -> Compensator
     if method == "none":
         return NoCompensation()
     if method == "adaptive":
-        return AdaptiveCompensator(profile.control.compensator.adaptive, 1.0 / profile.control.rate_hz)
+        adaptive = profile.control.compensator.adaptive
+        start = (1.0, 0.0, 0.0)
+        if adaptive.start == "model":
+            model = _actuator_model(profile)
+            start = (1.0, 1.0 / model.bandwidth_rad_s, model.loop_damping_Ns_per_m)
+        try:
+            return AdaptiveCompensator(adaptive, 1.0 / profile.control.rate_hz, start)
+        except ModelError as err:
+            raise ProfileError(str(err), profile.source_path, "control.compensator.adaptive.start") from err
     if method != "model":
         raise ProfileError(f"unknown compensation {method!r}; expected none, model or adaptive", profile.source_path,
                            "control.compensation")
@@ -121,6 +129,14 @@ def make_compensator(profile: Profile, method: str | None = None) -> Compensator
             profile.source_path, "control.compensator.model.correction_limit_N",
         )
     try:
-        return ModelCompensator(ActuatorModel.from_rig_actuator(profile.rig.actuator), settings)
+        return ModelCompensator(_actuator_model(profile), settings)
     except ModelError as err:
-        raise ProfileError(str(err), profile.source_path, "control.compensation") from err
+        raise ProfileError(str(err), profile.source_path, "control.compensator.model") from err
+
+
+def _actuator_model(profile: Profile) -> ActuatorModel:
+    """``k_h`` and ``w_f`` of ``rig.actuator``; ProfileError for a model (A1) does not describe."""
+    try:
+        return ActuatorModel.from_rig_actuator(profile.rig.actuator)
+    except ModelError as err:
+        raise ProfileError(str(err), profile.source_path, "rig.actuator.model") from err

@@ -379,7 +379,7 @@ def test_the_adaptive_compensator_allocates_nothing_per_tick() -> None:
 
 
 def test_a_rig_outside_the_adaptive_bounds_trips_compensation_fault_on_the_twin() -> None:
-    overrides = ["record.duration_s=10", "control.compensation=adaptive",
+    overrides = ["record.duration_s=10", "control.compensation=adaptive", "control.compensator.adaptive.start=none",
                  "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]  # the rig's k_h / w_f is 94 kN s/m
     profile = load_profile(None, overrides=overrides)
     result = run_rig_twin(profile, prepare_motion(profile), profile.control.rate_hz, build_controller_for_rig(profile, "phi"))
@@ -387,3 +387,15 @@ def test_a_rig_outside_the_adaptive_bounds_trips_compensation_fault_on_the_twin(
     healthy = load_profile(None, overrides=overrides[:2])
     result = run_rig_twin(healthy, prepare_motion(healthy), healthy.control.rate_hz, build_controller_for_rig(healthy, "phi"))
     assert result.extra["outcome"] == "completed" and result.extra["compensation"] == "adaptive"
+
+
+def test_the_adaptive_compensator_starts_from_the_actuator_model_or_from_none() -> None:
+    from_model = make_compensator(load_profile(None, overrides=["control.compensation=adaptive"]))
+    assert isinstance(from_model, AdaptiveCompensator)
+    assert tuple(from_model.coefficients) == pytest.approx((1.0, 1.0 / ACTUATOR.bandwidth_rad_s, 94_000.0), rel=0.01)
+    from_none = make_compensator(load_profile(None, overrides=["control.compensation=adaptive",
+                                                               "control.compensator.adaptive.start=none"]))
+    assert tuple(from_none.coefficients) == (1.0, 0.0, 0.0)
+    outside = ["control.compensation=adaptive", "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]
+    with pytest.raises(ProfileError, match="outside its bounds"):
+        make_compensator(load_profile(None, overrides=outside))
