@@ -130,6 +130,9 @@ def _print_study(console: Console, result: Any) -> None:
         title += f", design stiffness x{result.design_stiffness_scale:g}"
     if result.rig_effects:
         title += f", compensation {result.profile.control.compensation}, through the rig's sensor, actuator and safety models"
+    elif result.profile.control.compensation != "none" and "controlled" in result.cases:
+        console.print(f"  note: no compensation in the ideal simulation (it has no actuator); control.compensation "
+                      f"{result.profile.control.compensation} applies with --rig-effects", highlight=False)
         truth_note = truth_summary(result.truth_differences())
         if truth_note:
             console.print(f"  [yellow]note: {escape(truth_note)}[/]", highlight=False)

@@ -89,7 +89,7 @@ def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale
     return controller
 
 
-def make_compensator(profile: Profile, method: str | None = None) -> Compensator:
+def make_compensator(profile: Profile, method: str | None = None, controller: str | None = None) -> Compensator:
     """The force-tracking compensator ``method`` (default ``control.compensation``) of ``profile``.
 
     The adaptive compensator fits its coefficients online within ``control.compensator.adaptive``'s
@@ -97,10 +97,21 @@ def make_compensator(profile: Profile, method: str | None = None) -> Compensator
     ``w_f`` from ``rig.actuator`` (or its identified overlay) through :class:`ActuatorModel`, as
     the actuator-aware designs do.
 
+    Parameters
+    ----------
+    profile : Profile
+    method : str, optional
+        ``none``, ``model`` or ``adaptive``; default ``control.compensation``.
+    controller : str, optional
+        The design the compensator will serve: an actuator-aware design already inverts the
+        actuator in its own command (A7, A12 of harness/control/actuator_aware.py), so a
+        compensation on top of it would cancel the velocity feedback twice and is refused.
+
     Raises
     ------
     ProfileError
-        If ``rig.actuator`` is not a model the compensator can invert, or if the load-cell
+        If ``controller`` is actuator-aware and the method is not ``none``; if ``rig.actuator``
+        is not a model the compensator can invert, or if the load-cell
         correction's bound is not below ``safety.force.tracking_tolerance_N`` (the tracking check
         must still see an actuator the correction cannot pull back: docs/SAFETY.md,
         "Force-tracking compensation").
@@ -108,6 +119,12 @@ def make_compensator(profile: Profile, method: str | None = None) -> Compensator
     method = profile.control.compensation if method is None else method
     if method == "none":
         return NoCompensation()
+    if controller is not None and designed_with_actuator(profile, controller):
+        raise ProfileError(
+            f"controller {controller!r} is designed with the actuator: its command already carries the inverse and the flow "
+            f"term, and compensation {method!r} would add them again; use control.compensation=none with it",
+            profile.source_path, "control.compensation",
+        )
     if method == "adaptive":
         adaptive = profile.control.compensator.adaptive
         start = (1.0, 0.0, 0.0)

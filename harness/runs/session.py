@@ -238,7 +238,7 @@ def run_session(
     warm_up()  # the estimator's kernel must not compile inside the first tick
     # The profile's design runs through the profile's compensation; a given controller (an
     # identification's excitation) is commanded as it is.
-    compensator = make_compensator(profile) if controller is None else NoCompensation()
+    compensator = make_compensator(profile, controller=profile.control.controller) if controller is None else NoCompensation()
     if controller is None:
         controller = build_controller_for_rig(profile, profile.control.controller)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from harness.control.estimator import FrictionEstimator
-from harness.control.factory import build_controller_for_rig, designed_with_actuator, make_controller
+from harness.control.factory import build_controller_for_rig, designed_with_actuator, make_compensator, make_controller
 from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
 from harness.motions import GroundMotion
@@ -87,9 +87,11 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     """Simulate the passive case and (unless the controller is 'none') the controlled case.
 
     The ideal simulation is the design's world: plant and controller both use ``structure``
-    and ``bearing``. With ``options.rig_effects`` both cases run on the virtual rig's truth
-    (``rig.truth``, :mod:`harness.rig.truth`), while the controller and the friction estimator
-    keep the design.
+    and ``bearing``, and the controller's force acts as it is (no actuator, so no compensation:
+    ``control.compensation`` shapes the rig's actuator command, with ``--rig-effects``). With
+    ``options.rig_effects`` both cases run on the virtual rig's truth (``rig.truth``,
+    :mod:`harness.rig.truth`), while the controller and the friction estimator keep the design;
+    the controlled case's command goes through the profile's compensation.
 
     Parameters
     ----------
@@ -108,12 +110,6 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
             f"controller {name!r} is designed with the rig's actuator (its force a state, read from the load cell); "
             "the ideal simulation has no actuator: run it with --rig-effects",
             profile.source_path, "control.controller",
-        )
-    if name != NO_CONTROLLER and profile.control.compensation != "none" and not options.rig_effects:
-        raise ProfileError(
-            f"compensation {profile.control.compensation!r} shapes the command of the rig's actuator; the ideal simulation "
-            "has no actuator: run it with --rig-effects (or --set control.compensation=none)",
-            profile.source_path, "control.compensation",
         )
     controller = None if name == NO_CONTROLLER else make_controller(profile, name, scale)
     table = TableMotion.from_motion(motion)
@@ -137,7 +133,7 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
         rig_controller = make_controller(profile, name, scale) if offline else build_controller_for_rig(profile, name, scale)
         result.cases["controlled"] = run_rig_twin(
             profile, motion, settings.rate_hz, rig_controller, asynchronous_delay_s=settings.transport_delay_s,
-            offline_true_state=offline,
+            offline_true_state=offline, compensator=make_compensator(profile, controller=name),
         )
     elif controller is not None:
         estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)

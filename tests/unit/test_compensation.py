@@ -165,10 +165,12 @@ def test_a_correction_bound_not_below_the_tracking_tolerance_is_refused() -> Non
         make_compensator(profile)
 
 
-def test_the_ideal_simulation_refuses_a_compensation() -> None:
-    profile = load_profile(None, overrides=["control.compensation=model", "record.duration_s=2"])
-    with pytest.raises(ProfileError, match="--rig-effects"):
-        run_study(profile, StudyOptions())
+def test_the_ideal_simulation_has_no_actuator_to_compensate() -> None:
+    profile = load_profile(None, overrides=["record.duration_s=2", "control.compensation=model"])
+    ideal = run_study(profile, StudyOptions())
+    assert ideal.to_json()["sampling"]["compensation"] == "none" and "force_tracking_rms_N" not in ideal.to_json()
+    with_rig = run_study(profile, StudyOptions(rig_effects=True)).to_json()
+    assert with_rig["sampling"]["compensation"] == "model" and with_rig["force_tracking_rms_N"]["controller_force"] > 0.0
 
 
 # ---------------------------------------------------------------- compensation_fault
@@ -399,3 +401,14 @@ def test_the_adaptive_compensator_starts_from_the_actuator_model_or_from_none() 
     outside = ["control.compensation=adaptive", "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]
     with pytest.raises(ProfileError, match="outside its bounds"):
         make_compensator(load_profile(None, overrides=outside))
+
+
+def test_an_actuator_aware_design_refuses_a_compensation_on_top_of_its_own_inverse() -> None:
+    profile = load_profile(None, overrides=["control.compensation=model", "control.controller=phi-A"])
+    with pytest.raises(ProfileError, match="already carries the inverse"):
+        make_compensator(profile, controller="phi-A")
+    with pytest.raises(ProfileError, match="already carries the inverse"):
+        run_study(load_profile(None, overrides=["control.compensation=adaptive", "record.duration_s=2"]),
+                  StudyOptions(controller="phi-A", rig_effects=True))
+    assert isinstance(make_compensator(profile, controller="phi"), ModelCompensator)
+    assert isinstance(make_compensator(profile, "none", controller="phi-A"), NoCompensation)
