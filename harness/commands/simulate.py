@@ -129,13 +129,21 @@ def _print_study(console: Console, result: Any) -> None:
     if result.design_stiffness_scale != 1.0:
         title += f", design stiffness x{result.design_stiffness_scale:g}"
     if result.rig_effects:
-        title += ", through the rig's sensor, actuator and safety models"
+        title += f", compensation {result.profile.control.compensation}, through the rig's sensor, actuator and safety models"
+    elif result.profile.control.compensation != "none" and "controlled" in result.cases:
+        console.print(f"  note: no compensation in the ideal simulation (it has no actuator); control.compensation "
+                      f"{result.profile.control.compensation} applies with --rig-effects", highlight=False)
         truth_note = truth_summary(result.truth_differences())
         if truth_note:
             console.print(f"  [yellow]note: {escape(truth_note)}[/]", highlight=False)
     controlled = result.cases.get("controlled")
     if controlled is not None and controlled.extra.get("state_source", "measured") != "measured":
         console.print(f"  [yellow]note: the controller read the {controlled.extra['state_source']}[/]", highlight=False)
+    if controlled is not None and result.rig_effects:
+        tracking = result.force_tracking_rms_N()
+        console.print(f"  force tracking (RMS of load cell - force asked the sample before): "
+                      f"{tracking['controller_force'] / 1e3:.3f} kN against the controller's force, "
+                      f"{tracking['command'] / 1e3:.3f} kN against the command sent", highlight=False)
     if controlled is not None and controlled.extra.get("outcome") == "tripped":
         console.print(f"[bold red]the controlled case tripped:[/] {escape(controlled.extra['trip_reason'])}")
     peaks = controlled.peaks if controlled is not None else None

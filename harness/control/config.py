@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from harness.config.input_limits import (
@@ -13,6 +13,7 @@ from harness.config.input_limits import (
     MIN_STIFFNESS_SCALE,
 )
 from harness.config.schema import quantity
+from harness.control.compensation import CompensationName, CompensatorSettings
 from harness.control.designs import ControllerDesign
 
 
@@ -31,6 +32,11 @@ class ControlConfig:
     design_stiffness_scale: float = quantity(
         1.0, ge=MIN_STIFFNESS_SCALE, le=MAX_STIFFNESS_SCALE, doc="story stiffness of the controller's model / plant's"
     )
+    compensation: CompensationName = field(default="none", metadata={
+        "doc": "force-tracking compensation between the controller's force and the supervisor: none or model "
+               "(harness/control/compensation.py)",
+    })
+    compensator: CompensatorSettings = field(default_factory=CompensatorSettings)
 
     def __post_init__(self) -> None:
         if not self.designs:

@@ -7,8 +7,11 @@ and a run on the real rig all get the same design from the same profile.
 from __future__ import annotations
 
 from harness.control.actuator_aware import ActuatorModel
+from harness.control.adaptive_compensation import AdaptiveCompensator
+from harness.control.compensation import Compensator, NoCompensation
 from harness.control.controllers import Controller
 from harness.control.designs import OutputActuatorDesign, StateFeedbackActuatorDesign, build_controller
+from harness.control.model_compensation import ModelCompensator
 from harness.errors import ModelError, ProfileError
 from harness.profile import Profile
 
@@ -84,3 +87,73 @@ def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale
             profile.source_path, "control.controller",
         )
     return controller
+
+
+def make_compensator(profile: Profile, method: str | None = None, controller: str | None = None) -> Compensator:
+    """The force-tracking compensator ``method`` (default ``control.compensation``) of ``profile``.
+
+    The adaptive compensator fits its coefficients online within ``control.compensator.adaptive``'s
+    bounds, its window sized at ``control.rate_hz``. The model-based compensator takes ``k_h`` and
+    ``w_f`` from ``rig.actuator`` (or its identified overlay) through :class:`ActuatorModel`, as
+    the actuator-aware designs do.
+
+    Parameters
+    ----------
+    profile : Profile
+    method : str, optional
+        ``none``, ``model`` or ``adaptive``; default ``control.compensation``.
+    controller : str, optional
+        The design the compensator will serve: an actuator-aware design already inverts the
+        actuator in its own command (A7, A12 of harness/control/actuator_aware.py), so a
+        compensation on top of it would cancel the velocity feedback twice and is refused.
+
+    Raises
+    ------
+    ProfileError
+        If ``controller`` is actuator-aware and the method is not ``none``; if ``rig.actuator``
+        is not a model the compensator can invert, or if the load-cell
+        correction's bound is not below ``safety.force.tracking_tolerance_N`` (the tracking check
+        must still see an actuator the correction cannot pull back: docs/SAFETY.md,
+        "Force-tracking compensation").
+    """
+    method = profile.control.compensation if method is None else method
+    if method == "none":
+        return NoCompensation()
+    if controller is not None and designed_with_actuator(profile, controller):
+        raise ProfileError(
+            f"controller {controller!r} is designed with the actuator: its command already carries the inverse and the flow "
+            f"term, and compensation {method!r} would add them again; use control.compensation=none with it",
+            profile.source_path, "control.compensation",
+        )
+    if method == "adaptive":
+        adaptive = profile.control.compensator.adaptive
+        start = (1.0, 0.0, 0.0)
+        if adaptive.start == "model":
+            model = _actuator_model(profile)
+            start = (1.0, 1.0 / model.bandwidth_rad_s, model.loop_damping_Ns_per_m)
+        try:
+            return AdaptiveCompensator(adaptive, 1.0 / profile.control.rate_hz, start)
+        except ModelError as err:
+            raise ProfileError(str(err), profile.source_path, "control.compensator.adaptive.start") from err
+    if method != "model":
+        raise ProfileError(f"unknown compensation {method!r}; expected none, model or adaptive", profile.source_path,
+                           "control.compensation")
+    settings = profile.control.compensator.model
+    tolerance_N = profile.safety.force.tracking_tolerance_N
+    if not settings.correction_limit_N < tolerance_N:
+        raise ProfileError(
+            f"found {settings.correction_limit_N:g} N, expected below safety.force.tracking_tolerance_N = {tolerance_N:g} N",
+            profile.source_path, "control.compensator.model.correction_limit_N",
+        )
+    try:
+        return ModelCompensator(_actuator_model(profile), settings)
+    except ModelError as err:
+        raise ProfileError(str(err), profile.source_path, "control.compensator.model") from err
+
+
+def _actuator_model(profile: Profile) -> ActuatorModel:
+    """``k_h`` and ``w_f`` of ``rig.actuator``; ProfileError for a model (A1) does not describe."""
+    try:
+        return ActuatorModel.from_rig_actuator(profile.rig.actuator)
+    except ModelError as err:
+        raise ProfileError(str(err), profile.source_path, "rig.actuator.model") from err

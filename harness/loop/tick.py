@@ -1,4 +1,4 @@
-"""One tick of the control loop: read -> estimate -> control -> supervise -> write -> record.
+"""One tick of the control loop: read -> estimate -> control -> compensate -> supervise -> write -> record.
 
 Everything the tick touches is allocated before the run: the measurement record, the
 health record, the row, the drivers' frames and samples. Controllers, the estimator
@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from harness.control.compensation import Compensator, NoCompensation
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
@@ -98,6 +99,10 @@ class ControlTick:
     stop_table : callable, optional
         ``stop_table(now)``: the table controller's stop (RIG_CONTROL stop), for the ``stop_table``
         trip action and the safe stop of ``table_record_mismatch``; None when the run has no table link.
+    compensator : Compensator, optional
+        Turns the controller's force into the command the supervisor shapes and supervises
+        (``control.compensation``, harness/control/compensation.py); default none (the force as is).
+        Its health flags reach the supervisor's ``compensation_fault`` check through the tick's health.
     """
 
     def __init__(
@@ -110,11 +115,13 @@ class ControlTick:
         heartbeat_every: int = 5,
         estop_every: int = 5,
         stop_table: Callable[[float], object] | None = None,
+        compensator: Compensator | None = None,
     ):
         self.reader = link.reader
         self.writer = link.writer
         self.bus_health = link.reader.health
         self.controller = controller
+        self.compensator: Compensator = NoCompensation() if compensator is None else compensator
         self.estimator = estimator
         self.supervisor = supervisor
         self.recorder = recorder
@@ -202,7 +209,7 @@ class ControlTick:
             self.read(now, stall_s, missed_periods, poll)
             friction = self.estimator.update(t, dt, self.meas.sliding_velocity_m_s)
             raw = self.controller.update(t, dt, self.meas, friction, None)
-            command = supervisor.update(t, dt, self.health, raw)
+            command = supervisor.update(t, dt, self.health, self.compensate(t, dt, raw))
         except Exception as exc:  # noqa: BLE001 - any failure in the tick trips; it never kills the process
             command = supervisor.report_exception(t, exc)
         self.write(t, command, now)
@@ -222,6 +229,19 @@ class ControlTick:
             command = supervisor.report_exception(t, exc)
             self.send_disable(now)
         return command
+
+    def compensate(self, t: float, dt: float, raw: float) -> float:
+        """The compensator's command (N) for the controller's force ``raw`` (N); its health into the tick's.
+
+        The compensator is told the command the supervisor sent on the previous tick (0 while the
+        drive was disabled), so that its correction does not wind up against the supervisor's limits.
+        """
+        compensator, previous, health = self.compensator, self.command, self.health
+        force = compensator.update(t, dt, raw, self.meas, previous.force_N if previous.enable else 0.0)
+        health.compensation_pinned = compensator.pinned
+        health.compensation_diverged = compensator.diverged
+        health.compensation_value = compensator.bound_value
+        return force
 
     def write(self, t: float, command: SupervisedCommand, now: float) -> None:
         """Send the supervised command (the only path to the actuator) and the heartbeat; never raises.

@@ -20,9 +20,10 @@ from harness import exit_codes
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness
 from harness.console.live import LiveConsole
+from harness.control.compensation import NoCompensation
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
-from harness.control.factory import build_controller_for_rig
+from harness.control.factory import build_controller_for_rig, make_compensator
 from harness.errors import ProfileError
 from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
 from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult
@@ -240,6 +241,9 @@ def run_session(
         raise ProfileError(f"the CAN protocol carries {PROTOCOL_STORIES} stories; this profile has {profile.structure.n_stories}",
                            profile.source_path, "structure")
     warm_up()  # the estimator's kernel must not compile inside the first tick
+    # The profile's design runs through the profile's compensation; a given controller (an
+    # identification's excitation) is commanded as it is.
+    compensator = make_compensator(profile, controller=profile.control.controller) if controller is None else NoCompensation()
     if controller is None:
         controller = build_controller_for_rig(profile, profile.control.controller)
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
@@ -262,7 +266,8 @@ def run_session(
         ).start()
         heartbeat_every = max(1, round(profile.control.rate_hz / settings.can.heartbeat_rate_hz))
         estop_every = max(1, round(profile.control.rate_hz / settings.can.estop_rate_hz))
-        tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every, estop_every, stop_table)
+        tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every, estop_every, stop_table,
+                           compensator)
         if not profile.safety.estop.panel_required:
             _note_no_panel(folder, console)
         link.reader.tap, link.writer.tap = folder.frame_taps()

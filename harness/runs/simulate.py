@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from harness.control.estimator import FrictionEstimator
-from harness.control.factory import build_controller_for_rig, designed_with_actuator, make_controller
+from harness.control.factory import build_controller_for_rig, designed_with_actuator, make_compensator, make_controller
 from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
 from harness.motions import GroundMotion
@@ -21,6 +21,8 @@ from harness.profile import Profile
 from harness.recording import strict_json
 from harness.rig.truth import TruthDifference, truth_metadata
 from harness.runs.options import NO_CONTROLLER, StudyOptions, prepare_motion, resolve_profile
+from harness.signals.columns import FORCE_COMMAND, FORCE_RAW
+from harness.signals.force_tracking import force_tracking_rms_N
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 
 
@@ -54,12 +56,20 @@ class StudyResult:
                 "friction_source": self.settings.friction_source,
                 "design_stiffness_scale": self.design_stiffness_scale,
                 "rig_effects": self.rig_effects,
+                "compensation": controlled.extra.get("compensation", "none"),
                 "controller_state": controlled.extra.get("state_source", "measured" if self.rig_effects else "model"),
             },
             "total_weight_N": self.profile.structure.total_weight_N,
             "cases": {"passive": self.cases["passive"].peaks.as_json(), "controlled": controlled.peaks.as_json()},
+            **({"force_tracking_rms_N": self.force_tracking_rms_N()} if self.rig_effects and "controlled" in self.cases else {}),
             **truth_metadata(self.truth_differences()),
         }
+
+    def force_tracking_rms_N(self) -> dict[str, float]:
+        """The controlled case's force-tracking RMS errors (N): load cell against the controller's force and the command."""
+        columns = self.cases["controlled"].columns
+        return {"controller_force": force_tracking_rms_N(columns, FORCE_RAW),
+                "command": force_tracking_rms_N(columns, FORCE_COMMAND)}
 
     def write_json(self, path: str | Path) -> None:
         """Write :meth:`to_json` to ``path``."""
@@ -77,9 +87,11 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     """Simulate the passive case and (unless the controller is 'none') the controlled case.
 
     The ideal simulation is the design's world: plant and controller both use ``structure``
-    and ``bearing``. With ``options.rig_effects`` both cases run on the virtual rig's truth
-    (``rig.truth``, :mod:`harness.rig.truth`), while the controller and the friction estimator
-    keep the design.
+    and ``bearing``, and the controller's force acts as it is (no actuator, so no compensation:
+    ``control.compensation`` shapes the rig's actuator command, with ``--rig-effects``). With
+    ``options.rig_effects`` both cases run on the virtual rig's truth (``rig.truth``,
+    :mod:`harness.rig.truth`), while the controller and the friction estimator keep the design;
+    the controlled case's command goes through the profile's compensation.
 
     Parameters
     ----------
@@ -121,7 +133,7 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
         rig_controller = make_controller(profile, name, scale) if offline else build_controller_for_rig(profile, name, scale)
         result.cases["controlled"] = run_rig_twin(
             profile, motion, settings.rate_hz, rig_controller, asynchronous_delay_s=settings.transport_delay_s,
-            offline_true_state=offline,
+            offline_true_state=offline, compensator=make_compensator(profile, controller=name),
         )
     elif controller is not None:
         estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)

@@ -1,4 +1,4 @@
-"""Detectors on the actuator's servo controller: drive fault, pressure, status age, force tracking."""
+"""Detectors on the actuator's servo controller: drive fault, pressure, status age, force tracking, compensation."""
 
 from __future__ import annotations
 
@@ -128,4 +128,50 @@ class ForceTracking(Detector):
         self._target_N = 0.0
         if self._lag is not None:
             self._lag.reset(0.0, True)
+        self._timer.reset()
+
+
+class CompensationFault(Detector):
+    """The force-tracking compensator left its stated range: a bounded parameter held at its bound, or a state not finite.
+
+    The loop copies the compensator's own flags into ``health.compensation_pinned`` and
+    ``health.compensation_diverged`` each tick, after its update and before the supervisor's
+    (harness/control/compensation.py). A parameter at its bound means the actuator is not the
+    one the compensator was built for by more than it was allowed to correct; the bound is held
+    for ``tracking_time_s``, the time the force-tracking check gives a force error (docs/SAFETY.md,
+    "Force-tracking compensation", derives both). A state that is not finite trips at once.
+    """
+
+    NAME = "compensation_fault"
+    ACTION = Action.TRIP
+    DETECTS = "a compensator's correction or coefficient at its bound for tracking_time_s, or its state not finite"
+    BOUND = "tracking_time_s after a parameter reaches its bound; same tick for a state not finite"
+    RESET = "explicit reset, refused while the compensator's state is not finite; timer cleared"
+
+    __slots__ = ("_timer",)
+
+    def __init__(self, config: ForceConfig) -> None:
+        super().__init__()
+        self._timer = Persistence(config.tracking_time_s)
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True once a parameter has sat at its bound for ``tracking_time_s``, or at once for a state not finite."""
+        pinned = self._timer.update(t, health.compensation_pinned)
+        return health.compensation_diverged or pinned
+
+    def detail(self, health: TickHealth) -> str:
+        """Which failure, the parameter's value and the time allowed."""
+        if health.compensation_diverged:
+            return f"compensator state not finite (parameter {health.compensation_value!r}); expected finite"
+        return (
+            f"compensator parameter held at its bound ({health.compensation_value:.6g}) for "
+            f"{self._timer.limit_s:g} s; expected inside its bounds or back within {self._timer.limit_s:g} s"
+        )
+
+    def present(self, health: TickHealth) -> str:
+        """Still not finite? (A parameter at its bound cannot be judged from one sample.)"""
+        return self.detail(health) if health.compensation_diverged else ""
+
+    def reset(self) -> None:
+        """Clear the timer."""
         self._timer.reset()

@@ -26,7 +26,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import NamedTuple, Protocol
 
-from harness.safety.actuator_detectors import ActuatorStatusStale, DriveFault, ForceTracking, HydraulicPressure
+from harness.safety.actuator_detectors import (
+    ActuatorStatusStale,
+    CompensationFault,
+    DriveFault,
+    ForceTracking,
+    HydraulicPressure,
+)
 from harness.safety.comms_detectors import (
     BusErrorFrames,
     BusErrorPassive,
@@ -115,6 +121,7 @@ CHECKS: tuple[Check, ...] = (
     Check(18, HydraulicPressure, lambda config, table: HydraulicPressure()),
     Check(19, ActuatorStatusStale, lambda config, table: ActuatorStatusStale(config.actuator)),
     Check(20, ForceTracking, lambda config, table: ForceTracking(config.force)),
+    Check(33, CompensationFault, lambda config, table: CompensationFault(config.force)),
     # the loop's stalls
     Check(21, LoopStall, lambda config, table: LoopStall(config.run)),
     # the table against its record: the mismatch adds the tick's sample and judges when due

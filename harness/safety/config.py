@@ -129,7 +129,7 @@ TRIP_CLASS_OF: dict[str, str] = {
     "e2e_rejects": "comms", "bus_error_frames": "comms", "bus_error_passive": "comms", "bus_off": "comms",
     "bus_send_failures": "comms", "bus_gone": "comms", "foreign_command": "comms",
     "drive_fault": "actuator", "hydraulic_pressure": "actuator", "actuator_status_stale": "actuator",
-    "force_tracking": "actuator",
+    "force_tracking": "actuator", "compensation_fault": "actuator",
     "loop_stall": "loop", "loop_timing": "loop",
     "estop": "operator", "estop_lost": "operator", "operator_stop": "operator", "operator_trip": "operator",
     "tick_exception": "internal", "controller_output": "internal",
@@ -157,7 +157,9 @@ class TripActionsConfig:
     stroke: tuple[TripActionName, ...] = _actions("on stroke_hard, stroke_predictive")
     sensor: tuple[TripActionName, ...] = _actions("on the sensor_* checks")
     comms: tuple[TripActionName, ...] = _actions("on the e2e_rejects, bus_* and foreign_command checks")
-    actuator: tuple[TripActionName, ...] = _actions("on drive_fault, hydraulic_pressure, actuator_status_stale, force_tracking")
+    actuator: tuple[TripActionName, ...] = _actions(
+        "on drive_fault, hydraulic_pressure, actuator_status_stale, force_tracking, compensation_fault"
+    )
     loop: tuple[TripActionName, ...] = _actions("on loop_stall, loop_timing")
     operator: tuple[TripActionName, ...] = _actions("on estop, estop_lost, operator_trip (operator_stop when its action trips)")
     internal: tuple[TripActionName, ...] = _actions("on tick_exception, controller_output")

@@ -61,6 +61,13 @@ class TickHealth:
     record_time_s : float
         Time since the record started on the table (s), set by the loop; NaN while no record
         plays (before RUNNING, or while the table has not yet reported running).
+    compensation_pinned : bool
+        The force-tracking compensator's bounded parameter (a correction, a coefficient) sits at
+        its bound after this tick's update (:attr:`harness.control.compensation.Compensator.pinned`).
+    compensation_diverged : bool
+        The compensator's state is not finite (:attr:`harness.control.compensation.Compensator.diverged`).
+    compensation_value : float
+        The parameter pinned or diverged, for the event's detail (its own unit).
     """
 
     meas: Measurements = field(default_factory=Measurements)
@@ -88,3 +95,6 @@ class TickHealth:
     operator_stop: bool = False
     operator_trip: bool = False
     record_time_s: float = math.nan
+    compensation_pinned: bool = False
+    compensation_diverged: bool = False
+    compensation_value: float = 0.0

@@ -22,8 +22,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from harness.control.compensation import Compensator
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
+from harness.control.factory import make_compensator
 from harness.errors import ModelError
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
@@ -51,7 +53,7 @@ _HELD = tuple(name for name in _RECORDED if name != layout.FORCE_MEASURED)
 def run_rig_twin(
     profile: Profile, motion, rate_hz: float, controller: Controller, seed: int | None = None, asynchronous_delay_s: float = 0.0,
     story_rate_hz: float | None = None, lockstep: bool = False, duration_s: float | None = None,
-    offline_true_state: bool = False,
+    offline_true_state: bool = False, compensator: Compensator | None = None,
 ) -> CaseResult:
     """Simulate the controlled case through the rig's sensor, actuator and safety models.
 
@@ -83,6 +85,9 @@ def run_rig_twin(
     offline_true_state : bool
         Hand the controller the plant's true Z at each sample (offline design studies of
         full-state controllers only; a rig cannot). Without it the controller gets None.
+    compensator : Compensator, optional
+        Between the controller's force and the supervisor, as in the loop's tick; default the
+        profile's ``control.compensation`` (:func:`harness.control.factory.make_compensator`).
 
     Returns
     -------
@@ -107,19 +112,23 @@ def run_rig_twin(
     estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
     supervisor = Supervisor(profile.safety, period_s=period)
     health = TickHealth()
+    if compensator is None:
+        compensator = make_compensator(profile)
     rig.start()
     controller.reset()
+    compensator.reset()
     supervisor.arm(0.0, health)
     supervisor.start(0.0)
     span_s = motion.duration_s if duration_s is None else min(duration_s, motion.duration_s)
     samples = CaseSamples(int(round(span_s * rate_hz)), rig.table.y.size, _RECORDED)
     story_every = max(1, int(round(rate_hz / (story_rate_hz or profile.can.story_sensor_rate_hz))))
     true_state = profile.structure.n_stories * 2 + 2 if offline_true_state else 0
-    samples.run(rig.table, _twin_sample(rig, controller, estimator, supervisor, health, samples.values, period, story_every,
-                                        true_state))
+    samples.run(rig.table, _twin_sample(rig, controller, compensator, estimator, supervisor, health, samples.values, period,
+                                        story_every, true_state))
     samples.close(rig.table.y, ending={layout.FORCE_MEASURED: rig.actuator.force_N}, held=_HELD)
     result = _twin_result(rig, samples, period, supervisor, profile.structure.total_weight_N, started)
     result.extra["state_source"] = "true plant state (offline design study)" if offline_true_state else "measured"
+    result.extra["compensation"] = compensator.name
     return result
 
 
@@ -181,10 +190,10 @@ class _TwinRig:
 
 
 def _twin_sample(
-    rig: _TwinRig, controller: Controller, estimator: FrictionEstimator, supervisor: Supervisor, health: TickHealth,
-    values: dict[str, np.ndarray], period: float, story_every: int, true_state: int = 0,
+    rig: _TwinRig, controller: Controller, compensator: Compensator, estimator: FrictionEstimator, supervisor: Supervisor,
+    health: TickHealth, values: dict[str, np.ndarray], period: float, story_every: int, true_state: int = 0,
 ) -> Callable[[int], bool]:
-    """One controller sample of the twin: read the sensors, estimate, control, supervise, record, advance.
+    """One controller sample of the twin: read the sensors, estimate, control, compensate, supervise, record, advance.
 
     The returned ``sample(k)`` is False when the supervisor tripped (the case ends there).
     ``true_state`` > 0 hands the controller the first ``true_state`` entries of the plant's
@@ -211,7 +220,11 @@ def _twin_sample(
         meas.actuator_force_N = health.measured_force_N = actuator.force_N
         friction = estimator.update(t, period, meas.sliding_velocity_m_s)
         raw = controller.update(t, period, meas, friction, rig.table.y[:true_state] if true_state else None)
-        command = supervisor.update(t, period, health, raw)
+        previous = supervisor.command  # the previous sample's, as the loop's tick tells its compensator
+        force = compensator.update(t, period, raw, meas, previous.force_N if previous.enable else 0.0)
+        health.compensation_pinned, health.compensation_diverged = compensator.pinned, compensator.diverged
+        health.compensation_value = compensator.bound_value
+        command = supervisor.update(t, period, health, force)
         raw_force[k], command_force[k] = raw, command.force_N
         sliding_variable[k], friction_estimate[k] = controller.sliding_variable, friction
         if supervisor.state is State.TRIPPED:
