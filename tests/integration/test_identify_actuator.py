@@ -179,7 +179,9 @@ def test_the_fit_recovers_an_actuator_whose_truth_is_hidden_from_the_harness(tmp
     # The identified actuator against the true one over the excited band, within 5 % and 5 deg: its two
     # responses, command to force (blocked) and sliding velocity to force (the velocity feedback)
     from harness.identification.actuator_fit import (
-        ActuatorParameters, blocked_response, velocity_feedback_response,
+        ActuatorParameters,
+        blocked_response,
+        velocity_feedback_response,
     )
     from harness.rig.truth import true_hydraulics
 

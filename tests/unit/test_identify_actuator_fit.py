@@ -28,7 +28,8 @@ HYDRAULICS = PROFILE.rig.actuator.hydraulics
 #: The rig as the data have it: force loop, valve and bulk modulus away from the profile's.
 TRUE = dataclasses.replace(
     ActuatorParameters.from_config(HYDRAULICS, 0.002, 0.0015),
-    force_loop_bandwidth_hz=23.0, valve_bandwidth_hz=55.0, hydraulic_stiffness_N_per_m=1.3 * HYDRAULICS.cylinder.hydraulic_stiffness_N_per_m,
+    force_loop_bandwidth_hz=23.0, valve_bandwidth_hz=55.0,
+    hydraulic_stiffness_N_per_m=1.3 * HYDRAULICS.cylinder.hydraulic_stiffness_N_per_m,
 )
 
 
