@@ -21,6 +21,14 @@ worse of the two: refused when the largest age exceeds the limit (a tick in the 
 would have tripped; a rig that sends nothing has an infinite age), marginal when it exceeds half
 of it.
 
+Without real-time priority it also measures how much of the machine was idle over that second
+(``/proc/stat``). With every core busy with other work, the loop and the rig wait for time slices
+of the machine's scheduler; a second can look clean and the run still trip within seconds (with
+two busy processes on two cores and normal scheduling, 3 of the 7 runs the other criteria let
+through tripped ``sensor_stale``: benchmarks/README.md). Less than :data:`MIN_IDLE_CORES` of a
+core idle is refused, with how to get real-time priority; at real-time priority the machine's
+load does not matter and is not judged.
+
 The clock and the sleep are injectable, as for the scheduler, so tests run on a fake clock.
 """
 
@@ -28,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -37,6 +46,29 @@ import numpy as np
 from harness.errors import SafetyError
 from harness.realtime.scheduler import FixedRateScheduler
 from harness.safety.operator_detectors import HOST_TIMING_REMEDIES
+
+#: Idle CPU (in cores) below which a loop without real-time priority is refused: the machine's
+#: other work holds every core, so the loop and the rig wait for time slices.
+MIN_IDLE_CORES = 0.25
+
+
+def idle_cores(before: tuple[int, int] | None, after: tuple[int, int] | None, cores: int) -> float | None:
+    """Idle CPU between two :func:`cpu_times` readings, in cores; None where they are not available."""
+    if before is None or after is None or after[1] <= before[1]:
+        return None
+    return cores * (after[0] - before[0]) / (after[1] - before[1])
+
+
+def cpu_times() -> tuple[int, int] | None:
+    """(idle + iowait, total) jiffies of the machine from ``/proc/stat``; None where it cannot be read."""
+    try:
+        with open("/proc/stat", encoding="ascii") as handle:
+            fields = [int(value) for value in handle.readline().split()[1:]]
+    except (OSError, ValueError):
+        return None
+    if len(fields) < 5:
+        return None
+    return fields[3] + fields[4], sum(fields[:8])
 
 
 class HostTimingRefused(SafetyError):
@@ -68,6 +100,7 @@ class HostTiming:
     rig_age_p99_s: float | None = None
     rig_age_max_s: float | None = None
     max_sensor_age_s: float | None = None
+    idle_cores: float | None = None
 
     @property
     def watched_rig(self) -> bool:
@@ -83,6 +116,8 @@ class HostTiming:
         assert rig_p99 is not None and rig_max is not None and limit is not None
         if self.max_s > self.stall_budget_s or not rig_max <= limit:
             return "refused"  # the one second measured already held a wake-up the run would trip on
+        if self.idle_cores is not None and self.idle_cores < MIN_IDLE_CORES:
+            return "refused"  # no real-time priority and no core to spare
         if self.p99_s > 1.0 / self.rate_hz or self.max_s > self.stall_budget_s / 2 or rig_max > limit / 2:
             return "marginal"
         return "ok"
@@ -97,6 +132,8 @@ class HostTiming:
             else:
                 rig = (f"; the rig's sensor frames: age p99 {self.rig_age_p99_s * 1e3:.2f} ms, max "
                        f"{self.rig_age_max_s * 1e3:.2f} ms against a limit of {self.max_sensor_age_s * 1e3:.1f} ms")
+        if self.idle_cores is not None:
+            rig += f"; idle CPU {self.idle_cores:.2f} cores at normal scheduling (at least {MIN_IDLE_CORES:g} needed)"
         return (
             f"host timing at {self.rate_hz:g} Hz over {self.wakeups} wake-ups: lateness p50 {self.p50_s * 1e6:.0f} us, "
             f"p99 {self.p99_s * 1e6:.0f} us, max {self.max_s * 1e3:.2f} ms against a stall budget of "
@@ -117,7 +154,7 @@ class HostTiming:
             "rate_hz": self.rate_hz, "wakeups": self.wakeups, "lateness_p50_s": self.p50_s,
             "lateness_p99_s": self.p99_s, "lateness_max_s": self.max_s, "stall_budget_s": self.stall_budget_s,
             "rig_frame_age_p99_s": self.rig_age_p99_s, "rig_frame_age_max_s": self.rig_age_max_s,
-            "max_sensor_age_s": self.max_sensor_age_s, "verdict": self.verdict,
+            "max_sensor_age_s": self.max_sensor_age_s, "idle_cores": self.idle_cores, "verdict": self.verdict,
         }
 
 
@@ -131,6 +168,8 @@ def measure_host_timing(
     poll: Callable[[], object] | None = None,
     frame_counts: Callable[[], tuple[int, ...]] | None = None,
     max_sensor_age_s: float | None = None,
+    judge_idle: bool = False,
+    read_cpu_times: Callable[[], tuple[int, int] | None] = cpu_times,
 ) -> HostTiming:
     """Run the loop's scheduler empty for ``duration_s`` and measure its wake-up lateness.
 
@@ -153,6 +192,10 @@ def measure_host_timing(
         reader's counts): the rig is watched when given, with ``max_sensor_age_s``.
     max_sensor_age_s : float, optional
         ``safety.sensors.max_sensor_age_s`` (s).
+    judge_idle : bool
+        Measure the machine's idle CPU over the second (the loop has no real-time priority).
+    read_cpu_times : callable
+        :func:`cpu_times`, injectable for tests.
     """
     period_s = 1.0 / rate_hz
     wakeups = max(10, int(round(duration_s / period_s)))
@@ -163,6 +206,7 @@ def measure_host_timing(
     started = clock()
     last_seen = [started if count else -math.inf for count in counts]  # frames before the check count from its start
     scheduler = FixedRateScheduler(period_s, spin_s, clock=clock, sleep=sleep)
+    cpu_before = read_cpu_times() if judge_idle else None
     scheduler.start()
     previous = None
     for k in range(wakeups):
@@ -182,7 +226,9 @@ def measure_host_timing(
             counts = now_counts
             ages[k] = woke - min(last_seen)  # the oldest of the messages: what sensor_stale would judge
     p50, p99 = np.percentile(lateness, [50, 99])
-    timing = HostTiming(float(rate_hz), wakeups, float(p50), float(p99), float(lateness.max()), float(stall_budget_s))
+    idle = idle_cores(cpu_before, read_cpu_times(), os.cpu_count() or 1) if judge_idle else None
+    timing = HostTiming(float(rate_hz), wakeups, float(p50), float(p99), float(lateness.max()), float(stall_budget_s),
+                        idle_cores=idle)
     if not watch or max_sensor_age_s is None:
         return timing
     p99_age = float(np.percentile(ages, 99, method="higher"))  # a sample, never a mean with an infinite age

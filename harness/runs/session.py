@@ -173,14 +173,19 @@ def _reset_drive(link, folder, console) -> None:
         console.print(done.summary(), highlight=False)
 
 
-def _check_host_timing(profile: Profile, settings: SessionSettings, link, folder, report) -> HostTiming:
-    """The pre-flight timing check (harness.loop.preflight); refuses the run, nothing moved, if it fails."""
+def _check_host_timing(
+    profile: Profile, settings: SessionSettings, link, folder, report, judge_idle: bool = False,
+) -> HostTiming:
+    """The pre-flight timing check (harness.loop.preflight); refuses the run, nothing moved, if it fails.
+
+    ``judge_idle``: the loop has no real-time priority, so the machine's idle CPU is judged too.
+    """
     samples = [link.reader.sample(name) for name in CONTROL_MEASUREMENTS]
     timing = measure_host_timing(
         profile.control.rate_hz, profile.safety.run.max_stall_s, profile.loop.spin_s,
         poll=lambda: link.reader.poll(0.0),  # drain what the rig sends; ages are judged from the loop's first tick
         frame_counts=lambda: tuple(sample.count for sample in samples),  # and watch the rig's frames arrive
-        max_sensor_age_s=profile.safety.sensors.max_sensor_age_s,
+        max_sensor_age_s=profile.safety.sensors.max_sensor_age_s, judge_idle=judge_idle,
     )
     folder.record_event(None, "timing", "host_timing", timing.summary())
     if report is not None:
@@ -279,7 +284,8 @@ def run_session(
             _reset_drive(link, folder, console)
         if not settings.lockstep:  # before the pre-flight check, so that it measures the scheduling the run gets
             scheduling = request_fifo(profile.loop.realtime.fifo_priority)
-        host_timing = None if settings.lockstep else _check_host_timing(profile, settings, link, folder, on_host_timing)
+        host_timing = None if settings.lockstep else _check_host_timing(
+            profile, settings, link, folder, on_host_timing, judge_idle=scheduling is not None and not scheduling.granted)
         lockstep = make_lockstep(tick) if settings.lockstep and make_lockstep else None
         status = LoopStatus()
         tick.attach_status(status)  # stories, fault code and event lines for the live console

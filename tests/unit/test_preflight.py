@@ -132,3 +132,43 @@ def test_a_silent_rig_is_refused_naming_it():
     assert "none arrived" in timing.summary()
     with pytest.raises(HostTimingRefused, match="none arrived"):
         timing.check()
+
+
+def _cpu(idle_share: float):
+    """/proc/stat readings: 1000 jiffies per call, ``idle_share`` of them idle."""
+    state = {"idle": 0, "total": 0}
+
+    def read() -> tuple[int, int]:
+        reading = (state["idle"], state["total"])
+        state["idle"] += int(1000 * idle_share)
+        state["total"] += 1000
+        return reading
+
+    return read
+
+
+@pytest.mark.parametrize(("idle_share", "verdict"), [(0.0, "refused"), (0.1, "refused"), (0.5, "ok"), (0.9, "ok")])
+def test_without_real_time_priority_a_machine_with_no_core_to_spare_is_refused(idle_share, verdict, monkeypatch):
+    monkeypatch.setattr("harness.loop.preflight.os.cpu_count", lambda: 2)
+    clock = LateClock(0.0, 10**9)  # a clean second: only the idle CPU can refuse it
+    timing = measure_host_timing(RATE_HZ, BUDGET_S, 0.0, 1.0, clock, clock.sleep, judge_idle=True,
+                                 read_cpu_times=_cpu(idle_share))
+    assert timing.idle_cores == pytest.approx(2 * idle_share)
+    assert timing.verdict == verdict
+    if verdict == "refused":
+        with pytest.raises(HostTimingRefused, match="idle CPU 0.[0-9]+ cores at normal scheduling"):
+            timing.check()
+
+
+def test_at_real_time_priority_the_machine_s_load_is_not_judged():
+    clock = LateClock(0.0, 10**9)
+    timing = measure_host_timing(RATE_HZ, BUDGET_S, 0.0, 1.0, clock, clock.sleep, judge_idle=False,
+                                 read_cpu_times=_cpu(0.0))
+    assert timing.idle_cores is None and timing.verdict == "ok"
+
+
+def test_an_unreadable_proc_stat_judges_nothing():
+    from harness.loop.preflight import idle_cores
+
+    assert idle_cores(None, (1, 2), 2) is None and idle_cores((5, 10), (5, 10), 2) is None
+    assert idle_cores((0, 0), (250, 1000), 4) == pytest.approx(1.0)
