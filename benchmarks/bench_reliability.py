@@ -98,7 +98,7 @@ def one_run(args: argparse.Namespace, log_dir: Path) -> dict:
         "recorder_longest_hold_us": ((metadata.get("recorder") or {}).get("longest_hold_s") or 0.0) * 1e6,
         "threads": timing.get("threads"),
     }
-    if (folder / "signals.csv").is_file():
+    if (folder / "signals.csv").is_file() and metadata.get("outcome") != "refused":  # a refused run has no rows
         gaps = _gaps_ms(folder)
         edges = (0.0, *GAP_EDGES_MS, np.inf)
         result["gap_histogram"] = np.histogram(gaps, bins=edges)[0].tolist()
