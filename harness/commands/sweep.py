@@ -76,7 +76,7 @@ def add_parser(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("study", nargs="?", type=study_path, metavar="STUDY",
-                        help="study file (YAML), or the name of a shipped study (ida_friction, robustness_table2), "
+                        help="study file (YAML), or the name of a shipped study (compensation, ida_friction, robustness_table2), "
                         "found from any folder")
     parser.add_argument("--summarize", type=non_empty, metavar="RESULTS", help="report on a results folder instead of running")
     parser.add_argument("--out", type=output_dir, metavar="DIR", help="results folder (default: logs/sweeps/<study name>)")

@@ -83,7 +83,7 @@ class CaseSpec:
         flags = {"duration_s": "--duration", "time_scale": "--time-scale", "rate_hz": "--rate",
                  "friction": "--friction", "transport_delay_s": "--delay"}
         for name, value in self.options:
-            argv += [flags[name], str(value)]
+            argv += ["--rig-effects"] if name == "rig_effects" else [flags[name], str(value)]
         for item in (*base.overrides, *self.overrides):
             argv += ["--set", item]
         return argv
@@ -94,6 +94,7 @@ def options_of(study: Study) -> tuple[tuple[str, Any], ...]:
     given = {
         "duration_s": study.options.duration_s, "time_scale": study.options.time_scale, "rate_hz": study.options.rate_hz,
         "friction": study.options.friction, "transport_delay_s": study.options.transport_delay_s,
+        "rig_effects": study.options.rig_effects or None,  # false is the default: the same cases as leaving it out
     }
     return tuple((name, value) for name, value in given.items() if value is not None)
 

@@ -94,6 +94,9 @@ class CaseOptions:
     rate_hz: float | None = quantity(None, unit="Hz", gt=0, le=MAX_RATE_HZ, doc="controller sample rate (Hz)")
     friction: Literal["estimator", "model"] | None = None
     transport_delay_s: float | None = quantity(None, unit="s", ge=0, le=MAX_DELAY_S, doc="further delay (s)")
+    rig_effects: bool | None = dataclasses.field(
+        default=None, metadata={"doc": "run the rig's twin, as --rig-effects (the actuator, the table, the sensors)"},
+    )
 
 
 @dataclass(frozen=True)

@@ -134,6 +134,50 @@ def test_a_study_overlay_reaches_every_case_and_its_simulate_command(tmp_path, c
     assert status == 2 and "mu_max" in out
 
 
+def test_a_study_on_the_rig_twin_compares_compensations_as_harness_simulate_does(tmp_path, capsys):
+    """``options.rig_effects`` runs every case as ``harness simulate --rig-effects``, and a set axis over
+    ``control.compensation`` compares the methods (profiles/studies/compensation.yaml at scale)."""
+    body = f"""\
+name: twin
+profile: {PROFILES / "nceer_4dof.yaml"}
+options: {{duration_s: 2, rig_effects: true}}
+axes:
+  records: ["synthetic:4"]
+  controllers: [phi]
+  set: {{control.compensation: [none, model]}}
+"""
+    study = tmp_path / "twin.yaml"
+    study.write_text(body)
+    status, out = _sweep(capsys, str(study), "--out", str(tmp_path / "twin"), "--workers", "0")
+    assert status == 0, out
+    rows = _rows(tmp_path / "twin")
+    assert len(rows) == 2 and all(row["outcome"] == "ok" for row in rows.values())
+    by_method = {row["control.compensation"]: row for row in rows.values()}
+    assert by_method["none"]["controlled.peak_force_pct_weight"] != by_method["model"]["controlled.peak_force_pct_weight"]
+    for key, row in rows.items():
+        status, out = _sweep(capsys, str(study), "--case", key[:8])
+        argv = shlex.split(out.strip())[1:]
+        assert "--rig-effects" in argv
+        path = tmp_path / f"{key}.json"
+        assert main([*argv, "--json", str(path), "--quiet"]) == 0
+        capsys.readouterr()
+        doc = json.loads(path.read_text())
+        assert doc["sampling"]["rig_effects"] is True
+        for swept, simulated in _simulated_peaks(row, doc):
+            assert swept == pytest.approx(simulated, rel=1e-9, abs=1e-15)
+    plain = tmp_path / "plain.yaml"
+    plain.write_text(body.replace("rig_effects: true", "rig_effects: false"))
+    status, out = _sweep(capsys, str(plain), "--out", str(tmp_path / "plain"), "--workers", "0")
+    assert status == 0, out
+    assert not set(_rows(tmp_path / "plain")) & set(rows)  # the twin's cases are other cases
+
+
+def test_the_shipped_compensation_study_plans_its_243_cases(capsys):
+    status, out = _sweep(capsys, "compensation", "--plan")
+    assert status == 0, out
+    assert "243 cases (3 records x 3 PGA levels x 1 controller x 27 grid points x 1 sample)" in out
+
+
 RESUME = """\
 name: resume
 options: {duration_s: 2}
