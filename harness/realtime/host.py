@@ -116,8 +116,8 @@ def request_fifo(asked: int | str, auto_priority: int = AUTO_LOOP_PRIORITY, what
         return Scheduling(asked, 0, False, "", previous)
     priority = auto_priority if asked == AUTO else int(asked)
     label = f"SCHED_FIFO priority {priority} for {what}" + (" (auto)" if asked == AUTO else "")
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    try:  # reset on fork: a process started from this thread (the live console's) starts with normal scheduling
+        os.sched_setscheduler(0, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, os.sched_param(priority))
     except OSError as err:
         reason = err.strerror or str(err)
         if asked == AUTO:
@@ -141,10 +141,10 @@ def _raise_lock_sharers() -> list[tuple[int, int, int]]:
             continue
         try:
             policy = os.sched_getscheduler(tid)
-            if policy == os.SCHED_FIFO:
+            if policy & ~os.SCHED_RESET_ON_FORK in (os.SCHED_FIFO, os.SCHED_RR):
                 continue  # a real-time thread of its own (the in-process rig's): leave it
             before = os.sched_getparam(tid).sched_priority
-            os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(LOCK_SHARER_PRIORITY))
+            os.sched_setscheduler(tid, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, os.sched_param(LOCK_SHARER_PRIORITY))
         except OSError:
             continue  # gone, or not ours to change: it keeps what it had
         raised.append((tid, policy, before))

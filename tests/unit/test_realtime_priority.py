@@ -30,6 +30,7 @@ class FakeScheduler:
         self.others: dict[int, tuple[int, int]] = {}
 
     def setscheduler(self, pid: int, policy: int, param) -> None:
+        policy &= ~os.SCHED_RESET_ON_FORK  # the flag rides along; what was set is the policy
         if policy == os.SCHED_FIFO and not self.permitted:
             raise PermissionError(1, "Operation not permitted")
         if pid != 0:  # another thread of the process (a lock sharer)
@@ -189,3 +190,21 @@ def test_the_other_threads_of_the_process_go_to_the_lowest_real_time_priority_an
     finally:
         release.set()
         sharer.join()
+
+
+def test_a_process_started_while_the_loop_holds_fifo_starts_with_normal_scheduling():
+    """The live console's process is started after the request: SCHED_RESET_ON_FORK keeps it ordinary."""
+    import subprocess
+    import sys
+
+    scheduling = request_fifo(AUTO)
+    try:
+        if not scheduling.granted:
+            pytest.skip("SCHED_FIFO is not permitted here: " + scheduling.line)
+        child = subprocess.run([sys.executable, "-c", "import os; print(os.sched_getscheduler(0))"],
+                               capture_output=True, text=True, check=True)
+        assert int(child.stdout) == os.SCHED_OTHER
+        assert os.sched_getscheduler(0) & ~os.SCHED_RESET_ON_FORK == os.SCHED_FIFO
+    finally:
+        restore_scheduling(scheduling)
+    assert os.sched_getscheduler(0) == os.SCHED_OTHER
