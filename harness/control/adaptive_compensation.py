@@ -57,7 +57,7 @@ import math
 import numpy as np
 
 from drivers.measurements import Measurements
-from harness.control.compensation import AdaptiveCompensationConfig
+from harness.control.compensation import AdaptiveCompensationConfig, reference_step
 from harness.errors import ModelError
 
 #: Columns of the window's ring: the three regressors and the filtered command.
@@ -151,9 +151,7 @@ class AdaptiveCompensator:
         if not math.isfinite(force_N) or not math.isfinite(dt) or dt <= 0.0:
             self.command_N = math.nan
             return self.command_N
-        previous = self.reference_N
-        self.reference_N = previous + (1.0 - math.exp(-dt / self._tau)) * (force_N - previous)  # (C2)
-        rate = (force_N - self.reference_N) / self._tau
+        self.reference_N, rate = reference_step(self.reference_N, force_N, dt, self._tau)  # (C2)
         a = self.coefficients
         self.command_N = float(a[0] * self.reference_N + a[1] * rate + a[2] * meas.sliding_velocity_m_s)  # (C5)
         return self.command_N

@@ -30,11 +30,16 @@ copies both into :class:`harness.safety.health.TickHealth` and the supervisor's
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol
 
 from drivers.measurements import Measurements
 from harness.config.schema import quantity
+
+if TYPE_CHECKING:
+    from harness.safety.health import TickHealth
+    from harness.safety.supervisor import SupervisedCommand
 
 #: The methods of ``control.compensation``.
 CompensationName = Literal["none", "model", "adaptive"]
@@ -174,3 +179,29 @@ class NoCompensation:
         """``force_N`` unchanged (N)."""
         self.command_N = force_N
         return force_N
+
+
+def reference_step(reference_N: float, force_N: float, dt: float, tau_s: float) -> tuple[float, float]:
+    """One step of the reference (C2) for ``force_N`` held over ``dt``: the new ``r`` (N) and its rate ``r'`` (N/s).
+
+    ``r' = (f_d - r) / tau_r`` after the exact step of the lag, so the inverse needs no differencing.
+    """
+    reference_N += (1.0 - math.exp(-dt / tau_s)) * (force_N - reference_N)
+    return reference_N, (force_N - reference_N) / tau_s
+
+
+def compensate(
+    compensator: Compensator, t: float, dt: float, force_N: float, meas: Measurements, previous: SupervisedCommand,
+    health: TickHealth,
+) -> float:
+    """The compensator's command (N) for the controller's force ``force_N`` (N); its health into ``health``.
+
+    What the loop's tick and the rig twin both do between the controller and the supervisor. The
+    compensator is told the command the supervisor sent the tick before (``previous``; 0 while
+    the drive was disabled), so that its correction does not wind up against the supervisor's limits.
+    """
+    command_N = compensator.update(t, dt, force_N, meas, previous.force_N if previous.enable else 0.0)
+    health.compensation_pinned = compensator.pinned
+    health.compensation_diverged = compensator.diverged
+    health.compensation_value = compensator.bound_value
+    return command_N

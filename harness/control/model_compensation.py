@@ -56,7 +56,7 @@ import math
 
 from drivers.measurements import Measurements
 from harness.control.actuator_aware import ActuatorModel
-from harness.control.compensation import UNCHANGED_TOLERANCE_N, ModelCompensationConfig
+from harness.control.compensation import UNCHANGED_TOLERANCE_N, ModelCompensationConfig, reference_step
 from harness.errors import ModelError
 
 
@@ -125,9 +125,8 @@ class ModelCompensator:
         if not math.isfinite(force_N) or not math.isfinite(dt) or dt <= 0.0:
             self.command_N = math.nan
             return self.command_N
-        reference = self.reference_N + (1.0 - math.exp(-dt / self._tau)) * (force_N - self.reference_N)  # (C2)
-        self.reference_N = reference
-        self.feedforward_N = reference + (force_N - reference) / (self._tau * self._w_f)
+        self.reference_N, rate = reference_step(self.reference_N, force_N, dt, self._tau)  # (C2)
+        self.feedforward_N = self.reference_N + rate / self._w_f
         self.flow_N = self._damping * meas.sliding_velocity_m_s
         self.command_N = self.feedforward_N + self.flow_N + self.correction_N  # (C3)
         return self.command_N

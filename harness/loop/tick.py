@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from harness.control.compensation import Compensator, NoCompensation
+from harness.control.compensation import Compensator, NoCompensation, compensate
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
@@ -209,7 +209,8 @@ class ControlTick:
             self.read(now, stall_s, missed_periods, poll)
             friction = self.estimator.update(t, dt, self.meas.sliding_velocity_m_s)
             raw = self.controller.update(t, dt, self.meas, friction, None)
-            command = supervisor.update(t, dt, self.health, self.compensate(t, dt, raw))
+            command = supervisor.update(t, dt, self.health, compensate(self.compensator, t, dt, raw, self.meas, self.command,
+                                                                      self.health))
         except Exception as exc:  # noqa: BLE001 - any failure in the tick trips; it never kills the process
             command = supervisor.report_exception(t, exc)
         self.write(t, command, now)
@@ -229,19 +230,6 @@ class ControlTick:
             command = supervisor.report_exception(t, exc)
             self.send_disable(now)
         return command
-
-    def compensate(self, t: float, dt: float, raw: float) -> float:
-        """The compensator's command (N) for the controller's force ``raw`` (N); its health into the tick's.
-
-        The compensator is told the command the supervisor sent on the previous tick (0 while the
-        drive was disabled), so that its correction does not wind up against the supervisor's limits.
-        """
-        compensator, previous, health = self.compensator, self.command, self.health
-        force = compensator.update(t, dt, raw, self.meas, previous.force_N if previous.enable else 0.0)
-        health.compensation_pinned = compensator.pinned
-        health.compensation_diverged = compensator.diverged
-        health.compensation_value = compensator.bound_value
-        return force
 
     def write(self, t: float, command: SupervisedCommand, now: float) -> None:
         """Send the supervised command (the only path to the actuator) and the heartbeat; never raises.

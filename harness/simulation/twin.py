@@ -22,7 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from harness.control.compensation import Compensator
+from harness.control.compensation import Compensator, compensate
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import make_compensator
@@ -220,10 +220,7 @@ def _twin_sample(
         meas.actuator_force_N = health.measured_force_N = actuator.force_N
         friction = estimator.update(t, period, meas.sliding_velocity_m_s)
         raw = controller.update(t, period, meas, friction, rig.table.y[:true_state] if true_state else None)
-        previous = supervisor.command  # the previous sample's, as the loop's tick tells its compensator
-        force = compensator.update(t, period, raw, meas, previous.force_N if previous.enable else 0.0)
-        health.compensation_pinned, health.compensation_diverged = compensator.pinned, compensator.diverged
-        health.compensation_value = compensator.bound_value
+        force = compensate(compensator, t, period, raw, meas, supervisor.command, health)  # as the loop's tick does
         command = supervisor.update(t, period, health, force)
         raw_force[k], command_force[k] = raw, command.force_N
         sliding_variable[k], friction_estimate[k] = controller.sliding_variable, friction
