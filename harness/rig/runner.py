@@ -62,7 +62,8 @@ def _loop(
                 continue
             if not started:
                 scheduling = request_fifo(fifo_priority, AUTO_RIG_PRIORITY, "the virtual rig")
-                rig.scheduling_line = scheduling.line
+                if scheduling.line:
+                    rig.journal.note(scheduling.line)  # the rig's terminal prints it, as it prints its other changes
                 scheduler.start()
                 started = True
             scheduler.wait()

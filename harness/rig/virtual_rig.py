@@ -132,8 +132,6 @@ class VirtualRig:
         self._truth = np.zeros(len(SIGNALS))
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
-        #: What the serving thread's SCHED_FIFO request got, once it served in real time ("" before, or if none was asked).
-        self.scheduling_line = ""
         self._stop_event = threading.Event()
         self.error: BaseException | None = None
         #: Each state change, one line each, for a terminal that prints from its own thread (``harness rig``).

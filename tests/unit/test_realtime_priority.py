@@ -7,6 +7,7 @@ import os
 import pytest
 
 from harness.profile import load_profile
+from harness.rig.journal import RigJournal
 from harness.realtime import host
 from harness.realtime.host import (
     AUTO,
@@ -132,7 +133,7 @@ class _Rig:
     def __init__(self, stop, switch_after: int):
         self.schedule = type("S", (), {"sensor_period_s": 0.001})()
         self.lockstep = False
-        self.scheduling_line = ""
+        self.journal = RigJournal(clock=lambda: 0.0)
         self.ticks = 0
         self.stop = stop
         self.switch_after = switch_after
@@ -167,7 +168,8 @@ def test_the_rig_thread_runs_fifo_in_real_time_and_normal_in_lockstep(fake):
     lockstep = [policy for lockstep, policy in rig.seen if lockstep]
     assert real_time and set(real_time) == {os.SCHED_FIFO}
     assert lockstep and set(lockstep) == {os.SCHED_OTHER}
-    assert "(auto): granted" in rig.scheduling_line and f"priority {AUTO_RIG_PRIORITY}" in rig.scheduling_line
+    (line,) = [line for _, line in rig.journal.drain()]  # one line, in the rig's journal
+    assert "(auto): granted" in line and f"priority {AUTO_RIG_PRIORITY}" in line
     assert scheduler.policy == os.SCHED_OTHER  # given back when the thread ends
 
 
