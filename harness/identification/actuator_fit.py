@@ -39,6 +39,7 @@ drawings, ``k_h`` gives the bulk modulus ``beta_e = k_h V_t / (4 A^2)``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -113,8 +114,7 @@ class ActuatorParameters:
 
     def with_vector(self, values: np.ndarray) -> ActuatorParameters:
         """These parameters with the :data:`FITTED` ones replaced."""
-        changes = dict(zip(FITTED, (float(v) for v in values), strict=True))
-        return ActuatorParameters(**{**self.__dict__, **changes})
+        return dataclasses.replace(self, **dict(zip(FITTED, (float(v) for v in values), strict=True)))
 
 
 def _loop_terms(p: ActuatorParameters, freq_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -305,8 +305,7 @@ def _valve_correlation(p: ActuatorParameters, measured: Measured) -> float:
     base = np.array([p.valve_bandwidth_hz, p.valve_damping_ratio])
 
     def residual(x: np.ndarray) -> np.ndarray:
-        valve = {"valve_bandwidth_hz": x[0] * base[0], "valve_damping_ratio": x[1] * base[1]}
-        changed = ActuatorParameters(**{**p.__dict__, **valve})
+        changed = dataclasses.replace(p, valve_bandwidth_hz=x[0] * base[0], valve_damping_ratio=x[1] * base[1])
         return _residuals(changed, measured)
 
     r0 = residual(np.ones(2))

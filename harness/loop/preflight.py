@@ -110,10 +110,8 @@ class HostTiming:
     @property
     def verdict(self) -> str:
         """``"ok"``, ``"marginal"`` or ``"refused"`` (see the module docstring)."""
-        rig_p99 = self.rig_age_p99_s if self.watched_rig else 0.0
-        rig_max = self.rig_age_max_s if self.watched_rig else 0.0
-        limit = self.max_sensor_age_s if self.watched_rig else math.inf
-        assert rig_p99 is not None and rig_max is not None and limit is not None
+        rig_max = self.rig_age_max_s if self.rig_age_max_s is not None else 0.0
+        limit = self.max_sensor_age_s if self.max_sensor_age_s is not None else math.inf
         if self.max_s > self.stall_budget_s or not rig_max <= limit:
             return "refused"  # the one second measured already held a wake-up the run would trip on
         if self.idle_cores is not None and self.idle_cores < MIN_IDLE_CORES:

@@ -216,8 +216,9 @@ class ControlLoop:
         """Run the whole test: arm, settle, the record, the tail, the ramp-down."""
         duration_s = self.duration_s
         timing = self.timing
-        scheduling = self.scheduling if self.scheduling is not None or self.lockstep is None else Scheduling(
-            self.config.realtime.fifo_priority, 0, False, "", (0, 0))
+        scheduling = self.scheduling
+        if scheduling is None and self.lockstep is not None:  # lockstep asks for nothing: recorded as normal scheduling
+            scheduling = Scheduling(self.config.realtime.fifo_priority)
         report = apply_realtime(self.config.realtime, scheduling)
         tick, health = self.tick, self.tick.health
         run_started = armed_at = None

@@ -7,7 +7,6 @@ import os
 import pytest
 
 from harness.profile import load_profile
-from harness.rig.journal import RigJournal
 from harness.realtime import host
 from harness.realtime.host import (
     AUTO,
@@ -19,6 +18,7 @@ from harness.realtime.host import (
     restore_realtime,
     restore_scheduling,
 )
+from harness.rig.journal import RigJournal
 
 
 class FakeScheduler:
