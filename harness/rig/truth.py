@@ -122,9 +122,10 @@ def true_hydraulics(believed: HydraulicActuatorConfig, truth: ActuatorTruth | No
     if truth is None:
         return believed
     changes = given(truth)
-    loop = {k: changes.pop(k) for k in ("force_loop_bandwidth_hz",) if k in changes}
+    bandwidth_hz = changes.pop("force_loop_bandwidth_hz", believed.force_loop_bandwidth_hz)  # the loop's; the rest the cylinder's
     try:
-        return dataclasses.replace(believed, cylinder=dataclasses.replace(believed.cylinder, **changes), **loop)
+        return dataclasses.replace(believed, force_loop_bandwidth_hz=bandwidth_hz,
+                                   cylinder=dataclasses.replace(believed.cylinder, **changes))
     except ValueError as err:
         raise ProfileError(str(err), None, f"{TRUTH_KEY}.actuator") from err
 
