@@ -9,9 +9,11 @@ again here, each in a fresh interpreter over the whole test selection of ``[tool
 so the mutant is active while the modules are imported.
 
 A mutant counts as killed when a test failed (``killed``, or a failed fresh re-run) or the
-tests did not finish within mutmut's timeout (``timeout``). The survivors are printed with their
-diff so each can be judged: a test that kills it, or why it is equivalent (benchmarks/README.md,
-"Mutation testing").
+tests did not finish within mutmut's timeout (``timeout``). A survivor judged equivalent (no input
+can tell it from the original) is listed in ``scripts/mutation_verdicts.toml`` with the line it
+plants and why; the kill rate is over the others. A verdict whose line no longer matches the
+mutant's (the code changed) is reported as stale and counts as a survivor until judged again.
+The other survivors are printed with their diff, to be killed by a test or judged.
 
 Usage: python scripts/mutation_report.py [--jobs N]   (from the checkout, after a finished run)
 """
@@ -28,6 +30,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 MUTANTS = Path("mutants")
+VERDICTS = Path(__file__).with_name("mutation_verdicts.toml")
 #: Longest fresh re-run of one mutant over the whole selection (s); a hang counts as killed, as in mutmut.
 RERUN_TIMEOUT_S = 900.0
 
@@ -62,6 +65,28 @@ def _killed_in_a_fresh_interpreter(mutant: str, selection: list[str]) -> bool:
     return done.returncode not in (0, 5)
 
 
+def _planted_line(diff: str) -> str:
+    """The first line the mutant adds, stripped: what a verdict is checked against."""
+    return next((line[1:].strip() for line in diff.splitlines() if line.startswith("+") and not line.startswith("+++")),
+                "")
+
+
+def _equivalent(survivors: list[str]) -> tuple[dict[str, str], list[str]]:
+    """Survivors with a current equivalence verdict (name to why), and the names of stale verdicts."""
+    verdicts = {v["mutant"]: v for v in tomllib.loads(VERDICTS.read_text()).get("equivalent", [])} if VERDICTS.is_file() else {}
+    equivalent: dict[str, str] = {}
+    stale: list[str] = []
+    for name in survivors:
+        verdict = verdicts.get(name)
+        if verdict is None:
+            continue
+        if _planted_line(_mutmut("show", name)) == verdict["line"].strip():
+            equivalent[name] = verdict["why"]
+        else:
+            stale.append(name)
+    return equivalent, stale
+
+
 def main() -> int:
     """Re-run the import-time survivors, print the summary and every survivor's diff."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -90,14 +115,21 @@ def main() -> int:
     print("mutants by outcome: " + ", ".join(f"{state} {n}" for state, n in sorted(counts.items())))
     print(f"import-time survivors re-run in a fresh interpreter: {len(import_time)}, killed there: {sum(rerun.values())}")
     killed = counts.get("killed", 0) + counts.get("timeout", 0) + counts.get("killed at import", 0)
-    judged = killed + counts.get("survived", 0) + counts.get("no tests", 0) + counts.get("suspicious", 0)
+    survivors = [name for name, state in status.items() if state in ("survived", "no tests", "suspicious")]
+    equivalent, stale = _equivalent(survivors)
+    judged = killed + len(survivors)
     if judged:
         print(f"kill rate: {killed}/{judged} = {100.0 * killed / judged:.1f} % (killed + timeout + killed at import, "
               "over every mutant run; survivors and mutants no selected test reaches count against it)")
-    for name, state in status.items():
-        if state in ("survived", "no tests", "suspicious"):
+        print(f"equivalent survivors ({VERDICTS.name}): {len(equivalent)}; stale verdicts: {len(stale)}")
+        print(f"kill rate of non-equivalent mutants: {killed}/{judged - len(equivalent)} = "
+              f"{100.0 * killed / (judged - len(equivalent)):.1f} %")
+    for name in stale:
+        print(f"stale verdict (the mutant's line changed; judge it again): {name}")
+    for name in survivors:
+        if name not in equivalent:
             print()
-            print(f"[{state}] " + _mutmut("show", name).rstrip())
+            print(f"[{status[name]}] " + _mutmut("show", name).rstrip())
     return 0
 
 

@@ -1,0 +1,241 @@
+"""Edges of the safety layer and the tick that the third mutation run found without a test.
+
+Each test states a behaviour a maintainer could break with a one-character change (a
+comparison, a loop's ``continue``, a time stamp handed on): the boundaries of the stroke
+fade, the ring of the window counter, the stopping ramp's end, a jump on the base mat while
+the table is silent, the time stamps of trips and events, the counters of the trip outputs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+
+import pytest
+
+from harness.loop.tick import ControlTick
+from harness.loop.trip_outputs import TripOutputs
+from harness.safety.config import ForceConfig, SafetyConfig, SensorConfig, StrokeConfig
+from harness.safety.detector_base import TIME_EPS_S, WindowCounter
+from harness.safety.health import TickHealth
+from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeSoftFade
+from harness.safety.lifecycle import Lifecycle, State
+from harness.safety.sensor_detectors import SensorJump, SensorSignFlip
+from harness.safety.supervisor import Supervisor
+from tests.unit.test_control_tick import PERIOD_S, Bench
+from tests.unit.test_trip_actions import BOTH, EVERY, RecordingWriter, TableStop
+
+STROKE = StrokeConfig()
+SENSORS = SensorConfig()
+DT = 0.001
+
+
+# ------------------------------------------------------------------ the stroke fade and its neighbours
+def test_no_force_beyond_the_soft_limit_is_not_a_fade() -> None:
+    fade = StrokeSoftFade(STROKE)
+    x_b = STROKE.soft_limit_m + 0.5 * STROKE.fade_band_m
+    assert fade.apply(0.0, x_b) == 0.0
+    assert fade.acted is False, "nothing was faded, so no stroke_soft event is due"
+
+
+def test_a_small_outward_force_beyond_the_soft_limit_is_faded_too() -> None:
+    fade = StrokeSoftFade(STROKE)
+    x_b = STROKE.soft_limit_m + 0.5 * STROKE.fade_band_m
+    for force_N in (10.0, -10.0):  # force * x_b well below 1 N m: still outward
+        assert fade.apply(force_N, math.copysign(x_b, force_N)) == pytest.approx(0.5 * force_N)
+        assert fade.acted is True
+
+
+def test_an_inward_force_leaves_the_fade_not_acting() -> None:
+    fade = StrokeSoftFade(STROKE)
+    x_b = STROKE.soft_limit_m + 0.5 * STROKE.fade_band_m
+    fade.apply(100.0, x_b)
+    assert fade.acted is True
+    assert fade.apply(-100.0, x_b) == -100.0
+    assert fade.acted is False
+
+
+def test_the_clamp_and_the_rate_limit_say_false_when_they_did_not_act() -> None:
+    force = ForceConfig()
+    clamp, rate = ForceClamp(force), ForceRateLimit(force)
+    clamp.apply(2.0 * force.max_force_N)
+    rate.apply(force.max_force_rate_N_per_s, 0.0, 0.01)
+    assert clamp.acted is True and rate.acted is True
+    clamp.apply(0.0)
+    rate.apply(0.0, 0.0, 0.01)
+    assert clamp.acted is False and rate.acted is False
+
+
+# ------------------------------------------------------------------ the window counter
+def test_the_window_counter_counts_the_events_of_a_ring_not_yet_full() -> None:
+    counter = WindowCounter(max_count=3, window_s=1.0)
+    counter.update(4.0, 0)  # primes
+    counter.update(5.0, 2)  # two events at t = 5 s; two slots of four still empty
+    assert counter.count(5.0) == 2
+    assert counter.count(5.5) == 2
+    assert counter.count(6.5) == 0
+
+
+def test_an_event_exactly_one_window_old_still_counts() -> None:
+    window_s = 0.5
+    counter = WindowCounter(max_count=2, window_s=window_s)
+    counter.update(-1.0, 0)
+    counter.update(0.0, 1)
+    assert counter.count(window_s + TIME_EPS_S) == 1, "on the window's edge, within the clock tolerance"
+    assert counter.count(window_s + 10 * TIME_EPS_S) == 0
+
+
+# ------------------------------------------------------------------ sensor detectors
+def test_a_jump_on_the_base_mat_is_caught_while_the_table_sends_nothing() -> None:
+    det = SensorJump(SENSORS)
+    health = TickHealth()
+    assert det.update(0.0, DT, health) is False  # primes every channel
+    health.table_fresh = False  # the table's frame is late this tick; the base mat's arrived
+    health.meas.base_displacement_m = 2.0 * SENSORS.jump_limit_m
+    assert det.update(DT, DT, health) is True
+    assert det.detail(health).startswith("y_b changed by")
+
+
+def test_a_quiet_jump_check_answers_false() -> None:
+    det = SensorJump(SENSORS)
+    health = TickHealth()
+    assert det.update(0.0, DT, health) is False
+    assert det.update(DT, DT, health) is False
+
+
+def test_the_sign_flip_message_gives_its_times_in_whole_milliseconds_at_a_1_ms_tick() -> None:
+    config = dataclasses.replace(SENSORS, disagree_filter_s=1e-9, sign_flip_time_s=0.2)
+    det = SensorSignFlip(config)
+    health = TickHealth()
+    speed = 0.1
+    for k in range(2000):
+        health.meas.base_displacement_m = speed * k * DT
+        health.meas.base_velocity_m_s = -speed if k >= 10 else speed
+        if det.update(k * DT, DT, health):
+            break
+    else:
+        pytest.fail("the flip must be caught")
+    found = re.search(r"for (\S+) ms \(limit (\S+) ms\)", det.detail(health))
+    assert found, det.detail(health)
+    held_ms, limit_ms = (float(g) for g in found.groups())
+    assert limit_ms == 200.0
+    assert 200.0 <= held_ms <= 202.0 and held_ms == round(held_ms), "held a whole number of 1 ms ticks"
+
+
+# ------------------------------------------------------------------ lifecycle and supervisor
+def test_a_trip_without_a_detail_latches_an_empty_one() -> None:
+    lifecycle = Lifecycle()
+    assert lifecycle.trip(1.0, "estop") is True
+    assert (lifecycle.state, lifecycle.trip_reason, lifecycle.trip_detail) == (State.TRIPPED, "estop", "")
+
+
+def _running(config: SafetyConfig | None = None) -> tuple[Supervisor, TickHealth]:
+    supervisor = Supervisor(config or SafetyConfig())
+    health = TickHealth()
+    supervisor.arm(0.0, health)
+    supervisor.start(0.0)
+    return supervisor, health
+
+
+def _trip_events(supervisor: Supervisor) -> list[tuple[float, str]]:
+    events: list[tuple[float, str, str, str]] = []
+    supervisor.events.drain(lambda *event: events.append(event))
+    return [(t, name) for t, kind, name, _ in events if str(kind).lower().endswith("fault")]
+
+
+def test_a_controller_output_trip_is_stamped_with_the_ticks_time() -> None:
+    supervisor, health = _running()
+    supervisor.update(0.25, 0.004, health, 0.0)
+    command = supervisor.update(0.254, 0.004, health, math.nan)
+    assert command.trip_reason == "controller_output"
+    assert _trip_events(supervisor) == [(0.254, "controller_output")]
+    assert supervisor.lifecycle.entered_s == 0.254
+
+
+def test_a_hard_stroke_trip_is_stamped_with_the_ticks_time() -> None:
+    supervisor, health = _running()
+    health.meas.base_displacement_m = 1.01 * STROKE.hard_limit_m
+    command = supervisor.update(0.5, 0.004, health, 0.0)
+    assert command.trip_reason == "stroke_hard"
+    assert _trip_events(supervisor) == [(0.5, "stroke_hard")]
+    assert supervisor.lifecycle.entered_s == 0.5
+
+
+def test_with_zero_demand_the_stopping_ramp_ends_within_the_clock_tolerance_of_its_length() -> None:
+    supervisor, health = _running()
+    supervisor.update(0.004, 0.004, health, 0.0)
+    supervisor.stop(0.004)
+    ramp_s = supervisor.config.run.stopping_ramp_s
+    supervisor.update(0.004 + 0.5 * ramp_s, 0.5 * ramp_s, health, 0.0)
+    assert supervisor.state is State.STOPPING, "zero force, but the ramp's time is not up"
+    # a tick time that lands a rounding error short of the ramp's end: the ramp is done there
+    command = supervisor.update(0.004 + ramp_s - 0.5 * TIME_EPS_S, 0.5 * ramp_s, health, 0.0)
+    assert supervisor.state is State.DONE and command.force_N == 0.0 and not command.enable
+
+
+# ------------------------------------------------------------------ the tick and its trip outputs
+def test_a_safe_stop_after_a_trips_table_stop_counts_both() -> None:
+    table = TableStop()
+    outputs = TripOutputs(RecordingWriter(), BOTH, EVERY, table)
+    outputs.update(State.TRIPPED, "stroke_hard", 0.0)  # the trip stops the table: one
+    outputs.update(State.IDLE, "", 0.5)
+    outputs.stop_the_table(1.0)  # a later safe stop (table_record_mismatch) stops it again: two
+    assert outputs.table_stops == 2 and table.calls == [0.0, 1.0]
+
+
+@pytest.fixture
+def bench():
+    b = Bench()
+    yield b
+    b.close()
+
+
+def test_a_fresh_tick_has_shown_no_event(bench) -> None:
+    assert bench.tick.last_event == ""
+
+
+def test_an_exception_in_recording_trips_at_the_ticks_time_naming_the_exception(bench) -> None:
+    bench.run_until_running()
+    events: list[tuple[float, str, str, str]] = []
+
+    class BrokenRecorder:
+        def record_row(self, row) -> None:
+            raise OSError("disk gone")
+
+        def record_event(self, t: float, kind: str, name: str, detail: str) -> None:
+            events.append((t, kind, name, detail))
+
+    bench.tick.recorder = BrokenRecorder()
+    bench.publish()
+    t = bench.t
+    command = bench.tick.run(t, PERIOD_S, t)
+    assert command.trip_reason == "tick_exception"
+    assert "disk gone" in bench.supervisor.lifecycle.trip_detail and "OSError" in bench.supervisor.lifecycle.trip_detail
+    assert bench.supervisor.lifecycle.entered_s == t
+
+
+def test_each_event_reaches_the_recorder_and_the_console_with_its_time(bench) -> None:
+    from harness.loop.status import LoopStatus
+
+    recorded: list[tuple[float, str, str, str]] = []
+
+    class Recorder:
+        def record_row(self, row) -> None:
+            pass
+
+        def record_event(self, t: float, kind: str, name: str, detail: str) -> None:
+            recorded.append((t, kind, name, detail))
+
+    bench.tick = ControlTick(bench.link, bench.controller, bench.tick.estimator, bench.supervisor, Recorder(),
+                             heartbeat_every=1)
+    with LoopStatus() as status:
+        bench.tick.attach_status(status)
+        bench.run_until_running()
+        shown = status.recent_events()
+    assert recorded, "arming and starting are events"
+    assert all(isinstance(t, float) and 0.0 <= t <= bench.t for t, *_ in recorded)
+    armed = next(event for event in recorded if event[2] == "ARMED")
+    assert armed[0] == pytest.approx(3 * PERIOD_S)
+    assert shown and all(line.strip() for line in shown), "the console's event lines carry the text"
+    assert bench.tick.last_event == shown[-1]
