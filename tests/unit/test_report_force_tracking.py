@@ -1,0 +1,98 @@
+"""The force-tracking measures (harness/report/force_tracking.py) on signals whose answer is known."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from harness.report.force_tracking import force_tracking, has_load_cell, run_force_tracking
+from harness.signals.columns import FORCE_COMMAND, FORCE_MEASURED, FORCE_RAW, TIME
+
+DT = 0.002  # the shipped loop's period (s)
+
+
+def _force(t: np.ndarray) -> np.ndarray:
+    """A two-tone force (N) with no special relation to the sample period."""
+    return 3000.0 * np.sin(2 * np.pi * 1.3 * t) + 1200.0 * np.sin(2 * np.pi * 3.7 * t + 0.4)
+
+
+def _times(duration_s: float = 12.0) -> np.ndarray:
+    return np.arange(0.0, duration_s, DT)
+
+
+@pytest.mark.parametrize("delay_samples", [1.0, 2.3, 4.6])
+def test_a_delayed_copy_gives_its_delay_within_a_tenth_of_a_sample(delay_samples: float) -> None:
+    t = _times()
+    result = force_tracking(t, _force(t - delay_samples * DT), _force(t))
+    assert result is not None
+    assert result.delay_s == pytest.approx(delay_samples * DT, abs=0.1 * DT)
+    assert result.correlation > 0.99
+
+
+def test_a_force_one_sample_late_has_no_error_and_a_later_one_the_error_of_the_extra_lag() -> None:
+    # The error is measured[k + 1] - asked[k]: the period's hold is not an error; what lags beyond it is.
+    t = _times()
+    on_time = force_tracking(t, _force(t - DT), _force(t))
+    assert on_time is not None and on_time.rms_error_N == pytest.approx(0.0, abs=1e-6)
+    # One tone of amplitude A lagging by tau beyond the hold: an error of amplitude 2 A sin(w tau / 2).
+    tone = 2 * np.pi * 2.0 * t  # 2 Hz, 24 whole periods in the 12 s
+    late = force_tracking(t, np.sin(tone - 2 * np.pi * 2.0 * 3.0 * DT), np.sin(tone))
+    assert late is not None
+    expected = 200.0 * math.sin(2 * np.pi * 2.0 * 2.0 * DT / 2.0)  # % of the tone's RMS (and of its peak)
+    assert late.rms_error_percent == pytest.approx(expected, rel=0.01)
+    assert late.peak_error_percent == pytest.approx(expected, rel=0.01)
+
+
+@pytest.mark.parametrize("gain", [0.8, 1.25])
+def test_a_scaled_copy_gives_the_scale_error_in_percent(gain: float) -> None:
+    t = _times()
+    asked = _force(t)
+    measured = np.concatenate(([0.0], gain * asked[:-1]))  # on time (one sample), the wrong size
+    result = force_tracking(t, measured, asked)
+    assert result is not None
+    assert result.rms_error_percent == pytest.approx(100.0 * abs(gain - 1.0), rel=1e-6)
+    assert result.peak_error_percent == pytest.approx(100.0 * abs(gain - 1.0), rel=1e-6)
+    assert result.peak_error_N == pytest.approx(abs(gain - 1.0) * np.max(np.abs(asked[:-1])), rel=1e-9)
+
+
+def test_the_largest_error_is_placed_where_it_happens() -> None:
+    t = _times()
+    asked = _force(t)
+    measured = np.concatenate(([0.0], asked[:-1]))
+    measured[2500] += 900.0  # a 900 N spike at t = 5 s
+    result = force_tracking(t, measured, asked)
+    assert result is not None
+    assert result.peak_error_N == pytest.approx(900.0)
+    assert result.peak_error_t_s == pytest.approx(t[2500])
+
+
+def _columns(t: np.ndarray, measured: np.ndarray, raw: np.ndarray, command: np.ndarray) -> dict[str, np.ndarray]:
+    return {TIME: t, FORCE_MEASURED: measured, FORCE_RAW: raw, FORCE_COMMAND: command}
+
+
+def test_run_columns_without_a_load_cell_or_a_force_asked_have_no_tracking() -> None:
+    t = _times(2.0)
+    force = _force(t)
+    no_cell = {TIME: t, FORCE_RAW: force, FORCE_COMMAND: force}
+    assert not has_load_cell(no_cell) and run_force_tracking(no_cell) is None
+    silent_cell = _columns(t, np.full_like(t, np.nan), force, force)  # a loop that never heard the load cell
+    assert not has_load_cell(silent_cell) and run_force_tracking(silent_cell) is None
+    passive = _columns(t, np.zeros_like(t), np.zeros_like(t), np.zeros_like(t))
+    assert has_load_cell(passive) and run_force_tracking(passive) is None
+
+
+def test_run_columns_are_compared_with_the_column_asked_for_from_the_start_given() -> None:
+    t = _times(6.0)
+    raw = _force(t)
+    command = 1.5 * raw  # e.g. a compensator's command on top of the controller's force
+    measured = np.concatenate(([0.0], raw[:-1]))  # the actuator gives the controller's force
+    columns = _columns(t, measured, raw, command)
+    against_raw, against_command = run_force_tracking(columns, FORCE_RAW), run_force_tracking(columns, FORCE_COMMAND)
+    assert against_raw is not None and against_raw.rms_error_percent == pytest.approx(0.0, abs=1e-9)
+    assert against_command is not None and against_command.rms_error_percent == pytest.approx(100.0 / 3.0, rel=1e-6)
+    later = run_force_tracking(columns, FORCE_RAW, start_s=2.0)
+    assert later is not None and later.samples == int(np.sum(t >= 2.0)) - 1
+    with pytest.raises(ValueError, match="asked must be one of"):
+        run_force_tracking(columns, "drift_1_m")
