@@ -141,8 +141,8 @@ def has_load_cell(columns: Mapping[str, np.ndarray]) -> bool:
 
 
 def run_force_tracking(columns: Mapping[str, np.ndarray], asked: str = FORCE_RAW,
-                       start_s: float = -math.inf) -> ForceTracking | None:
-    """The :class:`ForceTracking` of a run's or a case's columns, from ``start_s`` on.
+                       start_s: float = -math.inf, end_s: float = math.inf) -> ForceTracking | None:
+    """The :class:`ForceTracking` of a run's or a case's columns, from ``start_s`` to ``end_s``.
 
     Parameters
     ----------
@@ -151,8 +151,8 @@ def run_force_tracking(columns: Mapping[str, np.ndarray], asked: str = FORCE_RAW
         case's columns; ``t_s``, ``force_measured_N`` and ``asked`` are read.
     asked : str
         ``force_raw_N`` (the controller's force, default) or ``force_command_N`` (the command sent).
-    start_s : float
-        First time included (s, the columns' clock), e.g. when the record started; default all.
+    start_s, end_s : float
+        First and last time included (s, the columns' clock), e.g. the record's span; default all.
 
     Returns
     -------
@@ -166,7 +166,7 @@ def run_force_tracking(columns: Mapping[str, np.ndarray], asked: str = FORCE_RAW
     if not has_load_cell(columns) or asked not in columns or TIME not in columns:
         return None
     t_s = np.asarray(columns[TIME], dtype=float)
-    inside = t_s >= start_s
+    inside = (t_s >= start_s) & (t_s <= end_s)
     wanted = np.asarray(columns[asked], dtype=float)[inside]
     if not np.any(np.nan_to_num(wanted) != 0.0):
         return None

@@ -1,13 +1,17 @@
-"""The force-tracking measures (harness/report/force_tracking.py) on signals whose answer is known."""
+"""The force-tracking measures (harness/report/force_tracking.py) on signals whose answer is known, and the report's section."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from harness.recording import write_simulation_case
+from harness.report import build_report
 from harness.report.force_tracking import force_tracking, has_load_cell, run_force_tracking
+from harness.report.force_tracking_table import TITLE, force_tracking_table
 from harness.signals.columns import FORCE_COMMAND, FORCE_MEASURED, FORCE_RAW, TIME
 
 DT = 0.002  # the shipped loop's period (s)
@@ -96,3 +100,44 @@ def test_run_columns_are_compared_with_the_column_asked_for_from_the_start_given
     assert later is not None and later.samples == int(np.sum(t >= 2.0)) - 1
     with pytest.raises(ValueError, match="asked must be one of"):
         run_force_tracking(columns, "drift_1_m")
+
+
+# ---------------------------------------------------------------------------- the report's section
+
+
+def _case(root: Path, case: str, measured: np.ndarray | None, raw: np.ndarray) -> Path:
+    """A simulated case folder (record time = loop time) with the force columns, the load cell if given."""
+    t = np.arange(raw.size) * DT
+    data = {TIME: t, "drift_1_m": 1e-3 * np.sin(t), FORCE_RAW: raw, FORCE_COMMAND: raw}
+    if measured is not None:
+        data[FORCE_MEASURED] = measured
+    metadata = {"total_weight_N": 39855.0, "record": {"name": "synthetic", "duration_s": float(t[-1])},
+                "controller": "passive" if case == "passive" else "phi", "profile_name": "nceer_4dof"}
+    return write_simulation_case(root / case, case, tuple(data), data, metadata)
+
+
+def test_the_report_of_a_run_with_a_load_cell_has_the_tracking_table_and_plot(tmp_path: Path) -> None:
+    t = _times()
+    raw = _force(t)
+    measured = np.concatenate(([0.0], 0.9 * raw[:-1]))  # one sample late, 10 % short
+    folder = _case(tmp_path, "controlled", measured, raw)
+    result = build_report([folder], tmp_path / "out")
+    (table,) = [table for table in result.context if table.title == TITLE]
+    by_asked = {row[1]: row for row in table.rows}
+    assert float(by_asked["the controller's force"][4]) == pytest.approx(10.0, abs=0.05)  # RMS error, %
+    assert float(by_asked["the controller's force"][6]) == pytest.approx(10.0, abs=0.05)  # peak error, %
+    assert float(by_asked["the controller's force"][2]) == pytest.approx(DT * 1e3, abs=0.1 * DT * 1e3)  # delay, ms
+    assert "force_tracking" in [plot.name for plot in result.plots]
+    assert (tmp_path / "out" / "force_tracking.png").is_file()
+    assert TITLE in result.summary and TITLE in result.html_path.read_text()
+
+
+def test_runs_without_a_load_cell_or_a_force_asked_get_no_tracking_section(tmp_path: Path) -> None:
+    t = _times(4.0)
+    no_cell = _case(tmp_path, "controlled", None, _force(t))
+    passive = _case(tmp_path, "passive", np.zeros_like(t), np.zeros_like(t))
+    result = build_report([no_cell, passive], tmp_path / "out")
+    assert TITLE not in [table.title for table in result.context]
+    assert "force_tracking" not in [plot.name for plot in result.plots]
+    assert TITLE not in result.summary
+    assert force_tracking_table(result.runs) is None
