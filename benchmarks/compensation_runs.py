@@ -41,7 +41,7 @@ sys.path.insert(0, str(REPO))
 
 from harness.profile import load_profile  # noqa: E402
 from harness.recording.reader import load_run  # noqa: E402
-from harness.report.force_tracking_table import run_tracking  # noqa: E402
+from harness.report.force_tracking_table import record_span, run_tracking  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
 from harness.runs.options import StudyOptions  # noqa: E402
 from harness.runs.simulate import run_study  # noqa: E402
@@ -89,9 +89,13 @@ def read_back(run_folder: str | Path) -> dict[str, Any]:
     run = load_run(run_folder)
     peaks = run_peaks(run)
     tracked = run_tracking(run).get(FORCE_RAW)
+    start, end = record_span(run)
+    trip = next((event for event in run.events if event.get("kind") == "fault"), None)
     return {"peaks": peaks.flatten(), "measured_force_pct_weight": peaks.measured_force_pct_weight,
             "tracking": None if tracked is None else tracked.as_json(),
-            "outcome": run.outcome, "trip_reason": run.metadata.get("trip_reason"), "run_folder": str(run.path)}
+            "outcome": run.outcome, "trip_reason": run.metadata.get("trip_reason"),
+            "trip_record_s": None if trip is None else float(trip["t_s"]) - start,
+            "record_s": end - start, "run_folder": str(run.path)}
 
 
 def reread(results: dict[str, Any]) -> dict[str, Any]:
@@ -160,7 +164,10 @@ def table_rows(results: dict[str, Any]) -> list[list[str]]:
         for path in PATHS:
             for method, run in entry.get(path, {}).items():
                 peaks = run["peaks"]
-                outcome = run["outcome"] + (f" ({run['trip_reason']})" if run.get("trip_reason") else "")
+                outcome = run["outcome"]
+                if run.get("trip_reason"):
+                    at = run.get("trip_record_s")
+                    outcome += f" ({run['trip_reason']}" + (f" at {at:.1f} s of record)" if at is not None else ")")
                 rows.append([name, path, method, *_tracking_cells(run["tracking"]),
                              _reductions(passive, peaks, DRIFTS), _reductions(passive, peaks, FLOORS),
                              f"{peaks['sliding_displacement_m'] * 1e3:.1f}", *_force_cells(run), outcome])

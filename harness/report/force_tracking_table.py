@@ -2,7 +2,7 @@
 
 Rows come from :func:`harness.report.force_tracking.run_force_tracking`, over the record (from
 the loop time the record started, :func:`harness.report.reference.record_start_s`, for the
-record's duration; the stopping ramp after it is left out): the load
+record's duration or until a trip, :func:`record_span`; the stopping ramp after it is left out): the load
 cell against the controller's force, and against the command sent. A run without a load cell
 (an offline simulation without rig effects) or without a force asked (a passive run) has no
 row; a report with no such run has no table.
@@ -32,11 +32,19 @@ NOTE = ("Load cell (force_measured_N) over the record against the controller's f
 
 
 def record_span(run: RunData) -> tuple[float, float]:
-    """Loop times (s) at which the run's record started and ended; the end is infinite when the duration is unknown."""
+    """Loop times (s) over which the run's actuator followed its controller: from the record's start to its end or the trip.
+
+    The end is the record's start plus its duration (infinite when unknown), or the run's first
+    fault event (a trip) if that came earlier: after a trip the force is the supervisor's, not the
+    controller's.
+    """
     start = record_start_s(run)
     record = run.metadata.get("record")
     duration = record.get("duration_s") if isinstance(record, Mapping) else None
-    return start, start + float(duration) if isinstance(duration, (int, float)) else math.inf
+    end = start + float(duration) if isinstance(duration, (int, float)) else math.inf
+    trips = [float(event["t_s"]) for event in run.events
+             if event.get("kind") == "fault" and isinstance(event.get("t_s"), (int, float))]
+    return start, min([end, *trips])
 
 
 def run_tracking(run: RunData) -> dict[str, ForceTracking]:

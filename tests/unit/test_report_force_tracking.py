@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from harness.recording import write_simulation_case
+from harness.recording.reader import RunData
 from harness.report import build_report
 from harness.report.force_tracking import force_tracking, has_load_cell, run_force_tracking
-from harness.report.force_tracking_table import TITLE, force_tracking_table
+from harness.report.force_tracking_table import TITLE, force_tracking_table, record_span, run_tracking
 from harness.signals.columns import FORCE_COMMAND, FORCE_MEASURED, FORCE_RAW, TIME
 
 DT = 0.002  # the shipped loop's period (s)
@@ -141,3 +142,20 @@ def test_runs_without_a_load_cell_or_a_force_asked_get_no_tracking_section(tmp_p
     assert "force_tracking" not in [plot.name for plot in result.plots]
     assert TITLE not in result.summary
     assert force_tracking_table(result.runs) is None
+
+
+def test_a_run_is_tracked_over_its_record_until_it_trips(tmp_path: Path) -> None:
+    t = _times(10.0)
+    raw = _force(t)
+    measured = np.concatenate(([0.0], raw[:-1]))
+    measured[t > 6.0] = 0.0  # after the trip at 6 s the supervisor holds the force at zero, not the controller
+    metadata = {"controller": "phi", "record": {"name": "synthetic", "duration_s": 8.0},
+                "summary": {"record_start_t_s": 1.0}}
+    run = RunData(tmp_path, metadata, {}, (TIME, FORCE_RAW, FORCE_MEASURED),
+                  {TIME: t, FORCE_RAW: raw, FORCE_MEASURED: measured}, [], None, False)
+    assert record_span(run) == (1.0, 9.0)
+    run.events.append({"t_s": 6.0, "kind": "fault", "name": "loop_stall"})
+    assert record_span(run) == (1.0, 6.0)
+    tracked = run_tracking(run)[FORCE_RAW]
+    assert tracked.rms_error_N == pytest.approx(0.0, abs=1e-9)  # nothing after the trip counts
+    assert tracked.samples == int(np.sum((t >= 1.0) & (t <= 6.0))) - 1
