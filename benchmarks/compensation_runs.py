@@ -134,8 +134,8 @@ def _reductions(passive: dict[str, float], peaks: dict[str, float], keys: tuple[
 
 def _tracking_cells(tracking: dict[str, Any] | None) -> list[str]:
     if tracking is None:
-        return ["-", "-", "-"]
-    return [f"{tracking['delay_s'] * 1e3:.1f}", f"{tracking['rms_error_percent']:.0f}",
+        return ["-", "-", "-", "-"]
+    return [f"{tracking['delay_s'] * 1e3:.1f}", f"{tracking['correlation']:.2f}", f"{tracking['rms_error_percent']:.0f}",
             f"{tracking['peak_error_percent']:.0f}"]
 
 
@@ -143,7 +143,7 @@ def _force_cells(run: dict[str, Any]) -> list[str]:
     return [f"{run['measured_force_pct_weight']:.1f}", f"{run['peaks']['peak_force_pct_weight']:.1f}"]
 
 
-HEADINGS = ("record", "path", "method", "tracking delay (ms)", "RMS error % of force asked",
+HEADINGS = ("record", "path", "method", "tracking delay (ms)", "correlation at the delay", "RMS error % of force asked",
             "peak error % of force asked", "drift reduction % (stories 1/2/3)",
             "floor acc. reduction % (floors 1/2/3)", "sliding disp. mm", "peak force % W (load cell)",
             "peak command % W", "outcome")
@@ -158,7 +158,7 @@ def table_rows(results: dict[str, Any]) -> list[list[str]]:
             continue
         passive, controlled = entry["ideal"]["passive"], entry["ideal"]["controlled"]
         name = f"{record} {pga_g:.2f} g"
-        rows.append([name, "ideal simulation", "phi", "-", "-", "-", _reductions(passive, controlled, DRIFTS),
+        rows.append([name, "ideal simulation", "phi", "-", "-", "-", "-", _reductions(passive, controlled, DRIFTS),
                      _reductions(passive, controlled, FLOORS), f"{controlled['sliding_displacement_m'] * 1e3:.1f}",
                      "-", f"{controlled['peak_force_pct_weight']:.1f}", "-"])
         for path in PATHS:
@@ -168,6 +168,8 @@ def table_rows(results: dict[str, Any]) -> list[list[str]]:
                 if run.get("trip_reason"):
                     at = run.get("trip_record_s")
                     outcome += f" ({run['trip_reason']}" + (f" at {at:.1f} s of record)" if at is not None else ")")
+                if run.get("first_attempt"):  # a run repeated after the host tripped it (see the README)
+                    outcome += f", 2nd attempt; 1st: {run['first_attempt']}"
                 rows.append([name, path, method, *_tracking_cells(run["tracking"]),
                              _reductions(passive, peaks, DRIFTS), _reductions(passive, peaks, FLOORS),
                              f"{peaks['sliding_displacement_m'] * 1e3:.1f}", *_force_cells(run), outcome])
