@@ -21,14 +21,15 @@ from harness.report.text_table import TextTable
 __all__ = ["force_tracking_table", "record_span", "run_tracking"]
 
 TITLE = "Force tracking: load cell against the force asked"
-HEADINGS = ("Run", "Against", "Delay (ms)", "RMS error (kN)", "RMS error (% of RMS asked)", "Peak error (kN)",
+HEADINGS = ("Run", "Against", "Delay (ms)", "Correlation", "RMS error (kN)", "RMS error (% of RMS asked)", "Peak error (kN)",
             "Peak error (% of peak asked)", "Largest error at (s)")
 NOTE = ("Load cell (force_measured_N) over the record against the controller's force (force_raw_N) and the command "
         "sent (force_command_N, after a compensator and the supervisor). Error: the load cell at the next sample minus "
         "the force asked (the command is held over the period). RMS error % = 100 RMS(error) / RMS(force asked); "
         "peak error % = 100 max|error| / max|force asked|. Delay: where the cross-correlation of the load cell with "
-        "the force asked peaks, refined to a fraction of a sample (positive: the force lags). Largest error at: record "
-        "time.")
+        "the force asked peaks, refined to a fraction of a sample (positive: the force lags); correlation: the "
+        "normalized cross-correlation there (well below 1: the load cell is not a late copy of the force asked, and "
+        "the delay means little). Largest error at: record time.")
 
 
 def record_span(run: RunData) -> tuple[float, float]:
@@ -68,7 +69,8 @@ def run_tracking(run: RunData) -> dict[str, ForceTracking]:
 
 
 def _row(run: RunData, result: ForceTracking) -> tuple[str, ...]:
-    return (run.label, ASKED_COLUMNS[result.asked], f"{result.delay_s * 1e3:+.2f}", f"{result.rms_error_N / 1e3:.3f}",
+    return (run.label, ASKED_COLUMNS[result.asked], f"{result.delay_s * 1e3:+.2f}", f"{result.correlation:.3f}",
+            f"{result.rms_error_N / 1e3:.3f}",
             f"{result.rms_error_percent:.1f}", f"{result.peak_error_N / 1e3:.3f}", f"{result.peak_error_percent:.1f}",
             f"{result.peak_error_t_s - record_start_s(run):.3f}")
 
@@ -87,5 +89,5 @@ def force_tracking_table(runs: Sequence[RunData]) -> TextTable | None:
     rows = tuple(_row(run, result) for run in runs for result in run_tracking(run).values())
     if not rows:
         return None
-    numeric = (False, False, True, True, True, True, True, True)
+    numeric = (False, False, True, True, True, True, True, True, True)
     return TextTable(TITLE, HEADINGS, rows, NOTE, key_columns=2, numeric=numeric)

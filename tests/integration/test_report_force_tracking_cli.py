@@ -23,8 +23,10 @@ def test_the_report_of_a_lockstep_dry_run_shows_its_force_tracking(tmp_path: Pat
     (table_file,) = out.glob("table_*_force_tracking_*.csv")
     with open(table_file, newline="") as handle:
         rows = list(csv.reader(handle))
-    assert {row[1] for row in rows[1:]} == {"the controller's force", "the command sent"}
+    against = rows[0].index("Against")
+    assert {row[against] for row in rows[1:]} == {"the controller's force", "the command sent"}
     # The numbers are the run's own: the load cell answered a force the controller asked for, late and not exactly.
     tracked = run_tracking(load_run(folder))[FORCE_RAW]
     assert tracked.samples > 500 and 0.0 < tracked.delay_s < 0.1 and tracked.rms_error_N > 0.0
-    assert any(row[2] == f"{tracked.delay_s * 1e3:+.2f}" for row in rows[1:])
+    delay = rows[0].index("Delay (ms)")
+    assert any(row[delay] == f"{tracked.delay_s * 1e3:+.2f}" for row in rows[1:])

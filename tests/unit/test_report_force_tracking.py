@@ -124,10 +124,12 @@ def test_the_report_of_a_run_with_a_load_cell_has_the_tracking_table_and_plot(tm
     folder = _case(tmp_path, "controlled", measured, raw)
     result = build_report([folder], tmp_path / "out")
     (table,) = [table for table in result.context if table.title == TITLE]
-    by_asked = {row[1]: row for row in table.rows}
-    assert float(by_asked["the controller's force"][4]) == pytest.approx(10.0, abs=0.05)  # RMS error, %
-    assert float(by_asked["the controller's force"][6]) == pytest.approx(10.0, abs=0.05)  # peak error, %
-    assert float(by_asked["the controller's force"][2]) == pytest.approx(DT * 1e3, abs=0.1 * DT * 1e3)  # delay, ms
+    by_asked = {row[1]: dict(zip(table.headings, row, strict=True)) for row in table.rows}
+    row = by_asked["the controller's force"]
+    assert float(row["RMS error (% of RMS asked)"]) == pytest.approx(10.0, abs=0.05)
+    assert float(row["Peak error (% of peak asked)"]) == pytest.approx(10.0, abs=0.05)
+    assert float(row["Delay (ms)"]) == pytest.approx(DT * 1e3, abs=0.1 * DT * 1e3)
+    assert float(row["Correlation"]) > 0.99
     assert "force_tracking" in [plot.name for plot in result.plots]
     assert (tmp_path / "out" / "force_tracking.png").is_file()
     assert TITLE in result.summary and TITLE in result.html_path.read_text()
