@@ -110,7 +110,7 @@ def force_tracking(t_s: np.ndarray, measured_N: np.ndarray, asked_N: np.ndarray,
     Returns
     -------
     ForceTracking or None
-        None with fewer than 3 usable samples, or no positive sample step.
+        None with fewer than 4 usable samples (3 errors), or no positive sample step.
     """
     t_s, measured_N, asked_N = (np.asarray(values, dtype=float) for values in (t_s, measured_N, asked_N))
     if not t_s.shape == measured_N.shape == asked_N.shape:
