@@ -107,6 +107,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
 
 def _print_study(console: Console, result: Any) -> None:
     """The record's facts, the controller's settings and the peak table of one study."""
+    from harness.report.force_tracking import tracking_lines
     from harness.report.tables import reduction_table
     from harness.rig.truth import truth_summary
 
@@ -140,10 +141,8 @@ def _print_study(console: Console, result: Any) -> None:
     if controlled is not None and controlled.extra.get("state_source", "measured") != "measured":
         console.print(f"  [yellow]note: the controller read the {controlled.extra['state_source']}[/]", highlight=False)
     if controlled is not None and result.rig_effects:
-        tracking = result.force_tracking_rms_N()
-        console.print(f"  force tracking (RMS of load cell - force asked the sample before): "
-                      f"{tracking['controller_force'] / 1e3:.3f} kN against the controller's force, "
-                      f"{tracking['command'] / 1e3:.3f} kN against the command sent", highlight=False)
+        for line in tracking_lines(result.force_tracking()):
+            console.print(f"  {line}", highlight=False)
     if controlled is not None and controlled.extra.get("outcome") == "tripped":
         console.print(f"[bold red]the controlled case tripped:[/] {escape(controlled.extra['trip_reason'])}")
     peaks = controlled.peaks if controlled is not None else None

@@ -13,10 +13,11 @@ used in every table, legend, CSV header and file name. Which peak tables a set o
   simulation). Runs whose metadata names no record match any record.
 
 Then the context: the record's facts, the table's target against achieved motion, the
-controller's parameters, the loop timing, and each run's events and interlocks. Among the
-warnings: a run whose virtual rig's truth differed from the design (``rig.truth``) says where, and
-a run whose table did not play its record, or played it doubtfully (the table check,
-harness/report/table_check.py), says so; its reductions are then withheld, or flagged.
+actuator's force tracking (every controlled run with a load cell), the controller's parameters,
+the loop timing, and each run's events and interlocks. Among the warnings: a run whose virtual
+rig's truth differed from the design (``rig.truth``) says where, and a run whose table did not
+play its record, or played it doubtfully (the table check, harness/report/table_check.py), says
+so; its reductions are then withheld, or flagged.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from harness.recording.reader import RunData, case_folders, load_runs
 from harness.report.context import controller_table, record_table, timing_table
 from harness.report.drive_faults import fault_text
 from harness.report.events_table import event_tables
+from harness.report.force_tracking_table import force_tracking_table
 from harness.report.html import report_html
 from harness.report.labels import file_slug, with_labels
 from harness.report.peak_table import PeakTable
@@ -89,8 +91,9 @@ def build_tables(runs: Sequence[RunData]) -> list[PeakTable]:
 
 
 def build_context(runs: Sequence[RunData]) -> list[TextTable]:
-    """Record, target against achieved table motion, controller, loop timing, then each run's events and interlocks."""
-    tables = [record_table(runs), target_motion_table(runs), controller_table(runs), timing_table(runs)]
+    """Record, target against achieved table motion, force tracking, controller, loop timing, then events and interlocks."""
+    tables = [record_table(runs), target_motion_table(runs), force_tracking_table(runs), controller_table(runs),
+              timing_table(runs)]
     return [table for table in tables if table is not None] + event_tables(runs)
 
 

@@ -7,6 +7,7 @@ results in the JSON layout of the issue tracker (SI).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,10 +20,10 @@ from harness.motions import GroundMotion
 from harness.motions.summary import motion_facts
 from harness.profile import Profile
 from harness.recording import strict_json
+from harness.report.force_tracking import ForceTracking, run_force_tracking
 from harness.rig.truth import TruthDifference, truth_metadata
 from harness.runs.options import NO_CONTROLLER, StudyOptions, prepare_motion, resolve_profile
 from harness.signals.columns import FORCE_COMMAND, FORCE_RAW
-from harness.signals.force_tracking import force_tracking_rms_N
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 
 
@@ -61,15 +62,29 @@ class StudyResult:
             },
             "total_weight_N": self.profile.structure.total_weight_N,
             "cases": {"passive": self.cases["passive"].peaks.as_json(), "controlled": controlled.peaks.as_json()},
-            **({"force_tracking_rms_N": self.force_tracking_rms_N()} if self.rig_effects and "controlled" in self.cases else {}),
+            **(self._tracking_json() if self.rig_effects and "controlled" in self.cases else {}),
             **truth_metadata(self.truth_differences()),
         }
 
-    def force_tracking_rms_N(self) -> dict[str, float]:
-        """The controlled case's force-tracking RMS errors (N): load cell against the controller's force and the command."""
+    def force_tracking(self) -> dict[str, ForceTracking | None]:
+        """The controlled case's force tracking (:mod:`harness.report.force_tracking`).
+
+        Returns
+        -------
+        dict
+            ``controller_force``: the load cell against the controller's force; ``command``:
+            against the command sent. None for a case without a load cell (no rig effects).
+        """
         columns = self.cases["controlled"].columns
-        return {"controller_force": force_tracking_rms_N(columns, FORCE_RAW),
-                "command": force_tracking_rms_N(columns, FORCE_COMMAND)}
+        return {"controller_force": run_force_tracking(columns, FORCE_RAW),
+                "command": run_force_tracking(columns, FORCE_COMMAND)}
+
+    def _tracking_json(self) -> dict:
+        """``force_tracking``: each :class:`ForceTracking` as a dict; ``force_tracking_rms_N``: their RMS errors (N)."""
+        tracked = self.force_tracking()
+        return {"force_tracking_rms_N": {name: math.nan if value is None else value.rms_error_N
+                                         for name, value in tracked.items()},
+                "force_tracking": {name: None if value is None else value.as_json() for name, value in tracked.items()}}
 
     def write_json(self, path: str | Path) -> None:
         """Write :meth:`to_json` to ``path``."""
