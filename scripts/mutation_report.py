@@ -87,6 +87,18 @@ def _equivalent(survivors: list[str]) -> tuple[dict[str, str], list[str]]:
     return equivalent, stale
 
 
+def _verdict_table(equivalent: dict[str, str]) -> str:
+    """The equivalent survivors as a markdown table: one row per function and reason, with the mutant numbers."""
+    rows: dict[tuple[str, str], list[str]] = {}
+    for name, why in equivalent.items():
+        function, _, number = name.rpartition("__mutmut_")
+        rows.setdefault((function.replace(".x_", ".").replace(".xǁ", ".").replace("ǁ", "."), why), []).append(number)
+    lines = ["| function | mutants | why equivalent |", "|---|---|---|"]
+    lines += [f"| `{function}` | {', '.join(sorted(numbers, key=int))} | {why} |"
+              for (function, why), numbers in sorted(rows.items())]
+    return "\n".join(lines)
+
+
 def main() -> int:
     """Re-run the import-time survivors, print the summary and every survivor's diff."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -126,6 +138,9 @@ def main() -> int:
               f"{100.0 * killed / (judged - len(equivalent)):.1f} %")
     for name in stale:
         print(f"stale verdict (the mutant's line changed; judge it again): {name}")
+    if equivalent:
+        print()
+        print(_verdict_table(equivalent))
     for name in survivors:
         if name not in equivalent:
             print()

@@ -16,11 +16,14 @@ import pytest
 
 from harness.loop.tick import ControlTick
 from harness.loop.trip_outputs import TripOutputs
-from harness.safety.config import ForceConfig, SafetyConfig, SensorConfig, StrokeConfig
+from harness.safety.actuator_detectors import CompensationFault, ForceTracking
+from harness.safety.config import ForceConfig, SafetyConfig, SensorConfig, StrokeConfig, check_config
 from harness.safety.detector_base import TIME_EPS_S, WindowCounter
 from harness.safety.health import TickHealth
 from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeSoftFade
 from harness.safety.lifecycle import Lifecycle, State
+from harness.safety.operator_detectors import EStopLost
+from harness.safety.prearm import pre_arm_failures
 from harness.safety.sensor_detectors import SensorJump, SensorSignFlip
 from harness.safety.supervisor import Supervisor
 from tests.unit.test_control_tick import PERIOD_S, Bench
@@ -239,3 +242,88 @@ def test_each_event_reaches_the_recorder_and_the_console_with_its_time(bench) ->
     assert armed[0] == pytest.approx(3 * PERIOD_S)
     assert shown and all(line.strip() for line in shown), "the console's event lines carry the text"
     assert bench.tick.last_event == shown[-1]
+
+
+# ------------------------------------------------------------------ pre-arm: ages on their bounds, words, all failures
+def _armable() -> TickHealth:
+    from tests.unit.test_prearm_words import _healthy
+
+    return _healthy()
+
+
+def test_ages_exactly_on_their_bounds_arm() -> None:
+    config = SafetyConfig()
+    health = _armable()
+    health.table_age_s = health.base_age_s = config.sensors.max_sensor_age_s
+    health.actuator_status_age_s = config.actuator.max_status_age_s
+    health.estop_panel_age_s = config.estop.max_panel_age_s
+    assert pre_arm_failures(config, health) == ()
+    lost = EStopLost(config.estop)
+    assert lost.update(0.0, 0.0, health) is False, "a panel frame exactly max_panel_age_s old is not lost"
+
+
+def test_the_refusals_give_large_ages_in_milliseconds() -> None:
+    config = SafetyConfig()
+    health = _armable()
+    health.base_age_s = 0.5
+    health.estop_panel_age_s = 0.5
+    failed = pre_arm_failures(config, health)
+    assert failed[0].startswith("sensors_fresh: table age 1.00 ms, base age 500.00 ms,")
+    assert failed[1].startswith("estop_panel_live: newest E-stop panel frame 500.0 ms old,")
+
+
+def test_a_refusal_lists_a_configuration_problem_with_the_sensor_failures_after_it() -> None:
+    config = dataclasses.replace(SafetyConfig(), stroke=StrokeConfig(soft_limit_m=0.07, fade_band_m=0.01, hard_limit_m=0.075))
+    assert check_config(config), "the fade band reaches past the hard limit"
+    health = _armable()
+    health.e2e_ok = False
+    names = [line.split(":")[0] for line in pre_arm_failures(config, health)]
+    assert names[0] == "config" and names[-1] == "e2e_ok"
+
+
+# ------------------------------------------------------------------ the supervisor's command outside a run
+def test_a_new_supervisor_commands_nothing_until_its_first_tick() -> None:
+    command = Supervisor(SafetyConfig()).command
+    assert (command.t, command.force_N, command.enable, command.state, command.trip_reason) == (
+        0.0, 0.0, False, State.IDLE, "")
+
+
+def test_an_idle_tick_stamps_the_command_with_its_time() -> None:
+    supervisor = Supervisor(SafetyConfig())
+    command = supervisor.update(1.25, 0.004, TickHealth(), 0.0)
+    assert (command.t, command.enable, command.state) == (1.25, False, State.IDLE)
+
+
+def test_arming_stamps_the_state_and_leaves_no_trip_reason_or_stop_behind() -> None:
+    supervisor, health = _running()
+    supervisor.stop(0.1, "operator")
+    supervisor.stop_reason, supervisor.stop_detail = "operator_stop", "the operator asked"
+    supervisor.update(0.2 + supervisor.config.run.stopping_ramp_s, 0.004, health, 0.0)
+    assert supervisor.state is State.DONE
+    supervisor.reset(2.0, health)
+    supervisor.arm(2.5, health)
+    assert supervisor.lifecycle.entered_s == 2.5
+    assert (supervisor.stop_reason, supervisor.stop_detail) == ("", "")
+    assert supervisor.command.trip_reason == "" and supervisor.command.state is State.ARMED
+
+
+# ------------------------------------------------------------------ actuator checks
+def test_a_reset_force_tracker_expects_zero_force() -> None:
+    tracker = ForceTracking(ForceConfig(actuator_time_constant_s=0.0))
+    tracker.command_N = 2_000.0
+    tracker.update(0.0, 0.004, TickHealth())
+    assert tracker.expected_N() == 2_000.0
+    tracker.reset()
+    assert tracker.expected_N() == 0.0
+
+
+def test_compensation_fault_is_still_present_only_while_the_state_is_not_finite() -> None:
+    detector = CompensationFault(ForceConfig())
+    health = TickHealth()
+    health.compensation_pinned = True
+    health.compensation_value = 5.0
+    assert detector.present(health) == "", "a pinned parameter cannot be judged from one sample"
+    health.compensation_diverged = True
+    health.compensation_value = math.nan
+    assert detector.present(health) == detector.detail(health)
+    assert detector.present(health).startswith("compensator state not finite (parameter nan)")
