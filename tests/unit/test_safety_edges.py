@@ -14,13 +14,25 @@ import re
 
 import pytest
 
+from harness.errors import ProfileError
 from harness.loop.tick import ControlTick
 from harness.loop.trip_outputs import TripOutputs
 from harness.safety.actuator_detectors import CompensationFault, ForceTracking
-from harness.safety.config import ForceConfig, SafetyConfig, SensorConfig, StrokeConfig, check_config
+from harness.safety.checks import CHECK_NAMES, bit
+from harness.safety.config import (
+    TRIP_CLASS_OF,
+    TRIP_CLASSES,
+    ForceConfig,
+    SafetyConfig,
+    SensorConfig,
+    StrokeConfig,
+    TripActionsConfig,
+    check_config,
+)
 from harness.safety.detector_base import TIME_EPS_S, WindowCounter
+from harness.safety.events import EventRing
 from harness.safety.health import TickHealth
-from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeSoftFade
+from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
 from harness.safety.lifecycle import Lifecycle, State
 from harness.safety.operator_detectors import EStopLost
 from harness.safety.prearm import pre_arm_failures
@@ -327,3 +339,65 @@ def test_compensation_fault_is_still_present_only_while_the_state_is_not_finite(
     health.compensation_value = math.nan
     assert detector.present(health) == detector.detail(health)
     assert detector.present(health).startswith("compensator state not finite (parameter nan)")
+
+
+def test_each_trip_action_field_documents_the_checks_of_its_class() -> None:
+    docs = {field.name: field.metadata["doc"] for field in dataclasses.fields(TripActionsConfig)}
+    assert set(docs) == set(TRIP_CLASSES)
+    for check, trip_class in TRIP_CLASS_OF.items():
+        doc = docs[trip_class]
+        named = check in doc or (check.startswith(("sensor_", "bus_")) and check.split("_")[0] + "_*" in doc)
+        assert named, f"{trip_class}'s doc {doc!r} does not name {check}"
+
+
+# ------------------------------------------------------------------ construction: what a new object says
+def test_new_interlocks_have_not_acted() -> None:
+    force = ForceConfig()
+    for interlock in (StrokeHardLimit(STROKE), StrokePredictiveLimit(STROKE), ForceClamp(force), ForceRateLimit(force),
+                      StrokeSoftFade(STROKE)):
+        assert interlock.acted is False, type(interlock).__name__
+
+
+def test_a_new_supervisor_has_no_stop_reason() -> None:
+    supervisor = Supervisor(SafetyConfig())
+    assert (supervisor.stop_reason, supervisor.stop_detail) == ("", "")
+
+
+def test_an_inconsistent_configuration_is_refused_naming_the_safety_section_and_every_problem() -> None:
+    config = dataclasses.replace(SafetyConfig(), stroke=StrokeConfig(soft_limit_m=0.07, fade_band_m=0.01, hard_limit_m=0.075),
+                                 trip_actions=TripActionsConfig(stroke=("disable", "disable")))
+    problems = check_config(config)
+    assert len(problems) == 2
+    with pytest.raises(ProfileError) as refused:
+        Supervisor(config)
+    assert refused.value.key_path == "safety"
+    assert str(refused.value) == "safety: inconsistent safety configuration: " + "; ".join(problems)
+
+
+def test_the_stopping_ramp_event_says_how_long_and_what_follows() -> None:
+    supervisor, health = _running()
+    supervisor.update(0.004, 0.004, health, 1_000.0)
+    supervisor.stop(0.004)
+    supervisor.update(0.008, 0.004, health, 1_000.0)
+    events: list[tuple[float, str, str, str]] = []
+    supervisor.events.drain(lambda *event: events.append(event))
+    ramp = [detail for _, _, name, detail in events if name == "stop_ramp"]
+    assert ramp == [f"force ramps to zero over {supervisor.config.run.stopping_ramp_s:g} s (safety.run.stopping_ramp_s), "
+                    "then the drive is disabled"]
+
+
+def test_an_event_ring_of_one_keeps_the_newest_event() -> None:
+    ring = EventRing(1)
+    ring.push(1.0, "state", "ARMED", "first")
+    ring.push(2.0, "state", "RUNNING", "second")
+    drained: list[tuple[float, str, str, str]] = []
+    assert ring.drain(lambda *event: drained.append(event)) == 1
+    assert drained == [(2.0, "state", "RUNNING", "second")] and ring.overwritten == 1
+    with pytest.raises(ValueError, match="event ring capacity is 0, expected at least 1"):
+        EventRing(0)
+
+
+def test_an_unknown_check_name_lists_the_known_ones() -> None:
+    with pytest.raises(KeyError) as unknown:
+        bit("stroke_sideways")
+    assert "unknown safety check 'stroke_sideways'; expected one of " + ", ".join(CHECK_NAMES) in str(unknown.value)
