@@ -30,14 +30,15 @@ from harness.safety.config import (
     check_config,
 )
 from harness.safety.detector_base import TIME_EPS_S, WindowCounter
-from harness.safety.events import EventRing
+from harness.safety.events import Action, EventRing
 from harness.safety.health import TickHealth
 from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
 from harness.safety.lifecycle import Lifecycle, State
 from harness.safety.operator_detectors import EStopLost
 from harness.safety.prearm import pre_arm_failures
-from harness.safety.sensor_detectors import SensorJump, SensorSignFlip
+from harness.safety.sensor_detectors import SensorJump, SensorSignFlip, SensorStuck
 from harness.safety.supervisor import Supervisor
+from harness.safety.table_record import NO_RECORD, TableRecordCheck
 from tests.unit.test_control_tick import PERIOD_S, Bench
 from tests.unit.test_trip_actions import BOTH, EVERY, RecordingWriter, TableStop
 
@@ -141,6 +142,7 @@ def test_the_sign_flip_message_gives_its_times_in_whole_milliseconds_at_a_1_ms_t
 # ------------------------------------------------------------------ lifecycle and supervisor
 def test_a_trip_without_a_detail_latches_an_empty_one() -> None:
     lifecycle = Lifecycle()
+    assert (lifecycle.state, lifecycle.trip_reason, lifecycle.trip_detail, lifecycle.entered_s) == (State.IDLE, "", "", 0.0)
     assert lifecycle.trip(1.0, "estop") is True
     assert (lifecycle.state, lifecycle.trip_reason, lifecycle.trip_detail) == (State.TRIPPED, "estop", "")
 
@@ -401,3 +403,43 @@ def test_an_unknown_check_name_lists_the_known_ones() -> None:
     with pytest.raises(KeyError) as unknown:
         bit("stroke_sideways")
     assert "unknown safety check 'stroke_sideways'; expected one of " + ", ".join(CHECK_NAMES) in str(unknown.value)
+
+
+def test_a_check_without_a_record_reports_why_and_has_no_gate() -> None:
+    check = TableRecordCheck(0.02)
+    assert math.isnan(check.gate_s)
+    assert check.summary() == {"verdict": "off", "signal": "table velocity xdot_0", "reason": NO_RECORD}
+
+
+def test_the_table_channels_are_judged_by_the_tables_freshness() -> None:
+    for det in (SensorJump(SENSORS), SensorStuck(SENSORS)):
+        health = TickHealth()
+        det.update(0.0, DT, health)
+        health.table_fresh = False  # the table's value is not a new sample, whatever it reads
+        health.meas.table_displacement_m = 2.0 * SENSORS.jump_limit_m
+        for k in range(1, SENSORS.stuck_samples + 2):
+            health.meas.base_displacement_m = 1e-6 * (k % 2)  # the base mat's noise: never stuck
+            health.meas.base_velocity_m_s = 1e-5 * (k % 2)
+            assert det.update(k * DT, DT, health) is False, type(det).__name__
+
+
+def test_a_stuck_base_mat_is_caught_while_the_table_sends_nothing() -> None:
+    det = SensorStuck(SENSORS)
+    health = TickHealth()
+    health.table_fresh = False
+    fired_at = None
+    for k in range(SENSORS.stuck_samples + 5):
+        health.meas.base_velocity_m_s = 1e-5 * (k % 2)  # the base mat's velocity moves; its displacement is frozen at 0
+        if det.update(k * DT, DT, health):
+            fired_at = k
+            break
+    assert fired_at == SENSORS.stuck_samples, "the first sample primes; each later equal one is a repeat"
+    assert det.detail(health).startswith("y_b = 0.0 repeated to the bit")
+
+
+def test_the_force_tracking_check_takes_its_action_from_the_profile_and_starts_from_zero() -> None:
+    tracker = ForceTracking(ForceConfig(actuator_time_constant_s=0.0, tracking_action="safe_stop"))
+    assert tracker.action is Action.SAFE_STOP
+    assert tracker.expected_N() == 0.0
+    tracker.update(0.0, 0.004, TickHealth())
+    assert tracker.expected_N() == 0.0, "nothing commanded yet"
