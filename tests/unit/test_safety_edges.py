@@ -443,3 +443,27 @@ def test_the_force_tracking_check_takes_its_action_from_the_profile_and_starts_f
     assert tracker.expected_N() == 0.0
     tracker.update(0.0, 0.004, TickHealth())
     assert tracker.expected_N() == 0.0, "nothing commanded yet"
+
+
+def test_the_stall_budget_refusal_gives_each_time_in_milliseconds_and_the_remedy() -> None:
+    from harness.safety.config import RunConfig
+
+    base = SafetyConfig()
+    config = dataclasses.replace(base, run=dataclasses.replace(base.run, max_stall_s=0.2),
+                                 sensors=dataclasses.replace(base.sensors, max_sensor_age_s=0.1),
+                                 stroke=dataclasses.replace(base.stroke, stop_time_s=0.25),
+                                 force=dataclasses.replace(base.force, actuator_time_constant_s=0.05))
+    assert isinstance(config.run, RunConfig)
+    assert check_config(config) == [
+        "run.max_stall_s (200.0 ms) + sensors.max_sensor_age_s (100.0 ms) = 300.0 ms of blind time exceeds what the "
+        "predictive stroke limit covers, stroke.stop_time_s - force.actuator_time_constant_s = 200.0 ms: "
+        "lower the stall budget or the sensor age, or lengthen stop_time_s (docs/SAFETY.md, Stall budget)"
+    ]
+
+
+def test_the_fade_band_refusal_says_what_would_happen() -> None:
+    config = dataclasses.replace(SafetyConfig(), stroke=StrokeConfig(soft_limit_m=0.07, fade_band_m=0.01, hard_limit_m=0.075))
+    assert check_config(config) == [
+        "stroke.fade_band_m (0.01 m) is wider than the soft-to-hard gap (0.005 m): force would still push outward at "
+        "the hard limit"
+    ]
