@@ -29,7 +29,7 @@ from harness.safety.config import (
     TripActionsConfig,
     check_config,
 )
-from harness.safety.detector_base import TIME_EPS_S, WindowCounter
+from harness.safety.detector_base import TIME_EPS_S, Persistence, WindowCounter
 from harness.safety.events import Action, EventRing
 from harness.safety.health import TickHealth
 from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
@@ -467,3 +467,56 @@ def test_the_fade_band_refusal_says_what_would_happen() -> None:
         "stroke.fade_band_m (0.01 m) is wider than the soft-to-hard gap (0.005 m): force would still push outward at "
         "the hard limit"
     ]
+
+
+@pytest.mark.parametrize(("group", "field"), [("sensors", "max_sensor_age_s"), ("run", "max_stall_s"),
+                                              ("estop", "max_panel_age_s")])
+def test_a_zero_time_is_refused_under_its_groups_name(group: str, field: str) -> None:
+    base = SafetyConfig()
+    config = dataclasses.replace(base, **{group: dataclasses.replace(getattr(base, group), **{field: 0.0})})
+    assert f"{group}.{field} is 0, expected > 0" in check_config(config)
+
+
+def test_unknown_and_missing_trip_actions_are_refused_word_for_word() -> None:
+    config = dataclasses.replace(SafetyConfig(), trip_actions=TripActionsConfig(stroke=("estop", "launch")))
+    assert check_config(config) == [
+        "trip_actions.stroke names ['launch'], expected disable, estop or stop_table",
+        "trip_actions.stroke is ['estop', 'launch']: disable cannot be removed (a trip always commands zero force with "
+        "the drive disabled first)",
+    ]
+
+
+def test_a_stopping_ramp_exactly_as_long_as_the_rate_limit_needs_is_accepted() -> None:
+    base = SafetyConfig()
+    ramp_needed = base.force.max_force_N / base.force.max_force_rate_N_per_s
+    config = dataclasses.replace(base, run=dataclasses.replace(base.run, stopping_ramp_s=ramp_needed))
+    assert check_config(config) == []
+
+
+def test_a_reset_persistence_counts_from_the_conditions_return() -> None:
+    timer = Persistence(0.1)
+    assert timer.update(0.0, True) is False
+    timer.reset()
+    assert timer.active is False and timer.held_s(1.0) == 0.0
+    assert timer.update(1.0, True) is False, "held 0 s since it came back"
+    assert timer.update(1.05, True) is False
+    assert timer.update(1.1, True) is True
+
+
+def test_a_small_derivative_beside_a_fast_velocity_is_not_a_sign_flip() -> None:
+    config = dataclasses.replace(SENSORS, disagree_filter_s=1e-9)
+    det = SensorSignFlip(config)
+    health = TickHealth()
+    for k in range(200):  # the base mat's displacement stands still while its velocity reads 10 floors forward
+        health.meas.base_velocity_m_s = 10.0 * config.sign_flip_floor_m_s
+        assert det.update(k * DT, DT, health) is False
+
+
+@pytest.mark.parametrize(("derivative", "velocity"), [(1.0, -2.0), (2.0, -1.0), (-1.0, 2.0), (-2.0, 1.0)])
+def test_a_value_exactly_on_the_sign_flip_floor_is_not_above_it(derivative: float, velocity: float) -> None:
+    det = SensorSignFlip(SENSORS)
+    floor = SENSORS.sign_flip_floor_m_s
+    det._deriv[1].y, det._vel[1].y = derivative * floor, velocity * floor
+    assert det._bad(1) is False
+    det._deriv[1].y, det._vel[1].y = 2.0 * derivative * floor, 2.0 * velocity * floor
+    assert det._bad(1) is True
