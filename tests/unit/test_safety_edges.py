@@ -36,7 +36,7 @@ from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimi
 from harness.safety.lifecycle import Lifecycle, State
 from harness.safety.operator_detectors import EStopLost
 from harness.safety.prearm import pre_arm_failures
-from harness.safety.sensor_detectors import SensorJump, SensorSignFlip, SensorStuck
+from harness.safety.sensor_detectors import SensorDisagree, SensorJump, SensorSignFlip, SensorStuck
 from harness.safety.supervisor import Supervisor
 from harness.safety.table_record import NO_RECORD, TableRecordCheck
 from tests.unit.test_control_tick import PERIOD_S, Bench
@@ -520,3 +520,32 @@ def test_a_value_exactly_on_the_sign_flip_floor_is_not_above_it(derivative: floa
     assert det._bad(1) is False
     det._deriv[1].y, det._vel[1].y = 2.0 * derivative * floor, 2.0 * velocity * floor
     assert det._bad(1) is True
+
+
+def test_a_pair_starts_from_its_velocity_and_again_after_a_gap_exactly_as_long_as_the_persistence_time() -> None:
+    # binary-exact times: two 0.25 s ticks without a sample make a span of exactly the 0.5 s persistence time
+    config = dataclasses.replace(SENSORS, disagree_filter_s=1e-9, disagree_time_s=0.5)
+    det = SensorDisagree(config)
+    health = TickHealth()
+    health.meas.base_velocity_m_s = 0.1
+    det.update(0.0, 0.25, health)
+    assert (det._deriv[1].y, det._vel[1].y) == (0.1, 0.1), "the first sample primes both filters with the velocity"
+    health.base_fresh = False
+    det.update(0.25, 0.25, health)
+    health.base_fresh = True
+    health.meas.base_displacement_m = 1.0  # 2 m/s over the gap, were it differentiated
+    det.update(0.5, 0.25, health)
+    assert (det._deriv[1].y, det._vel[1].y) == (0.1, 0.1), "a span of the persistence time is a gap: start again"
+
+
+def test_a_missed_sample_widens_the_span_the_derivative_is_taken_over() -> None:
+    config = dataclasses.replace(SENSORS, disagree_filter_s=1e-9)
+    det = SensorDisagree(config)
+    health = TickHealth()
+    speed = 0.2  # m/s, four times the tolerance
+    for k in range(400):  # a sample every other tick, each 2 DT further
+        health.base_fresh = k % 2 == 0
+        health.meas.base_displacement_m = speed * DT * (k - k % 2)
+        health.meas.base_velocity_m_s = speed
+        assert det.update(k * DT, DT, health) is False, k
+    assert det._deriv[1].y == pytest.approx(speed)
