@@ -549,3 +549,14 @@ def test_a_missed_sample_widens_the_span_the_derivative_is_taken_over() -> None:
         health.meas.base_velocity_m_s = speed
         assert det.update(k * DT, DT, health) is False, k
     assert det._deriv[1].y == pytest.approx(speed)
+
+
+def test_after_priming_the_derivative_is_filtered_from_the_velocity() -> None:
+    det = SensorDisagree(SENSORS)  # the shipped 20 ms filter
+    health = TickHealth()
+    health.meas.base_velocity_m_s = 0.1
+    det.update(0.0, DT, health)
+    health.meas.base_displacement_m = 0.001 * DT  # 1 mm/s over the next tick
+    det.update(DT, DT, health)
+    gain = DT / (SENSORS.disagree_filter_s + DT)
+    assert det._deriv[1].y == pytest.approx(0.1 + gain * (0.001 - 0.1)), "one filter step from the primed 0.1 m/s"
