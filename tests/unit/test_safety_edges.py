@@ -557,6 +557,36 @@ def test_after_priming_the_derivative_is_filtered_from_the_velocity() -> None:
     health.meas.base_velocity_m_s = 0.1
     det.update(0.0, DT, health)
     health.meas.base_displacement_m = 0.001 * DT  # 1 mm/s over the next tick
+    health.meas.base_velocity_m_s = 0.3  # the mean over the tick: 0.2 m/s
     det.update(DT, DT, health)
     gain = DT / (SENSORS.disagree_filter_s + DT)
     assert det._deriv[1].y == pytest.approx(0.1 + gain * (0.001 - 0.1)), "one filter step from the primed 0.1 m/s"
+    assert det._vel[1].y == pytest.approx(0.1 + gain * (0.2 - 0.1)), "one filter step from the primed 0.1 m/s"
+
+
+def test_a_reset_low_pass_is_primed_by_its_next_input_and_a_reset_tracker_expects_zero() -> None:
+    from harness.safety.detector_base import LowPass
+
+    lag = LowPass(0.01)
+    lag.update(5.0, 0.001)
+    lag.reset()
+    assert (lag.y, lag.primed) == (0.0, False)
+    assert lag.update(3.0, 0.001) == 3.0
+    tracker = ForceTracking(ForceConfig(actuator_time_constant_s=0.01))
+    tracker.command_N = 2_000.0
+    tracker.update(0.0, 0.004, TickHealth())
+    tracker.reset()
+    assert tracker.expected_N() == 0.0
+
+
+def test_a_disagreement_on_the_table_is_reported_on_the_table() -> None:
+    config = dataclasses.replace(SENSORS, disagree_filter_s=1e-9)
+    det = SensorDisagree(config)
+    health = TickHealth()
+    for k in range(1000):
+        health.meas.table_velocity_m_s = 1.0  # the table's displacement stands still
+        if det.update(k * DT, DT, health):
+            break
+    else:
+        pytest.fail("the disagreement must be caught")
+    assert "x_0" in det.detail(health) and "y_b" not in det.detail(health)
