@@ -34,6 +34,11 @@ from harness.rig.faults import (
 )
 from harness.rig.sensors import MESSAGE_COLUMNS, SensorModel
 
+#: The sensor messages' targets, which SENSOR_SET carries together.
+_SENSOR_SET_TARGETS = tuple(range(SENSOR_TARGETS))
+#: Each message's target on its own, for the frame-level faults of a message sent alone.
+_ALONE = tuple((target,) for target in range(len(TARGETS)))
+
 
 class RigPublisher:
     """Encodes and sends the rig's messages through ``writer``'s frames.
@@ -98,11 +103,13 @@ class RigPublisher:
         if tx is None:
             raise ValueError("SENSOR_SET is a message of the CAN FD protocol; this rig's bus is classic (can.fd is false)")
         values = self._set_values
-        for target in range(SENSOR_TARGETS):
-            values[3 * target : 3 * target + 3] = self._measure(target)
-        ok = self._send_faulted(tx, range(SENSOR_TARGETS), values, now)
+        for target in _SENSOR_SET_TARGETS:
+            measured = self._measure(target)
+            base = 3 * target
+            values[base], values[base + 1], values[base + 2] = measured[0], measured[1], measured[2]
+        ok = self._send_faulted(tx, _SENSOR_SET_TARGETS, values, now)
         if ok:
-            for target in range(SENSOR_TARGETS):
+            for target in _SENSOR_SET_TARGETS:
                 self.sent[target] += 1
         return ok
 
@@ -145,17 +152,20 @@ class RigPublisher:
 
     def send(self, target: int, values: list[float], now: float) -> bool:
         """Send message ``target`` with ``values``, applying the frame-level faults."""
-        ok = self._send_faulted(self.frames[target], (target,), values, now)
+        ok = self._send_faulted(self.frames[target], _ALONE[target], values, now)
         if ok:
             self.sent[target] += 1
         return ok
 
-    def _on(self, kind: int, targets: range | tuple[int, ...]) -> bool:
-        """Fault ``kind`` is on for one of ``targets``."""
+    def _on(self, kind: int, targets: tuple[int, ...]) -> bool:
+        """Fault ``kind`` is on for one of ``targets`` (a loop, not ``any()``: no generator per frame)."""
         is_on = self.faults.is_on
-        return any(is_on(kind, target) for target in targets)
+        for target in targets:
+            if is_on(kind, target):
+                return True
+        return False
 
-    def _send_faulted(self, tx: TxFrame, targets: range | tuple[int, ...], values: list[float], now: float) -> bool:
+    def _send_faulted(self, tx: TxFrame, targets: tuple[int, ...], values: list[float], now: float) -> bool:
         """Send ``tx`` with ``values``, applying the frame-level faults of ``targets`` (the messages it carries)."""
         faults = self.faults
         if faults.is_on(BUS_SILENCE) or self._on(DROPOUT, targets):
