@@ -11,7 +11,12 @@ every model sees the same, realistic command.
 
 Target (issue 20): at 500 Hz the rig's CPU per period stays at or under 40 % of the period.
 
-Usage: python benchmarks/bench_rig_cpu.py [--record el_centro] [--duration S] [--rounds N] [--json PATH]
+With ``--set can.fd=true`` (and ``--rate 2000``) the rig publishes on the CAN FD protocol: one
+SENSOR_SET frame per period instead of the four classic sensor messages (``--set`` applies to
+every model).
+
+Usage: python benchmarks/bench_rig_cpu.py [--record el_centro] [--duration S] [--rounds N] [--rate HZ]
+       [--set KEY.PATH=VALUE ...] [--json PATH]
 """
 
 from __future__ import annotations
@@ -43,10 +48,11 @@ MODELS = {
 
 def rig_cpu(overrides: tuple[str, ...], motion, rate_hz: float, forces: np.ndarray) -> np.ndarray:
     """Thread CPU time (s) of each lockstep step of one rig over the record."""
-    profile = load_profile(None, overrides=overrides)
+    profile = load_profile(None, overrides=list(overrides))
+    can_config = profile.can_settings(rate_hz=rate_hz)
     bus = can.Bus(interface="virtual", channel=f"bench-rig-{time.monotonic_ns()}", receive_own_messages=False)
     try:
-        rig = VirtualRig(profile, motion, bus, step_period_s=1.0 / rate_hz, lockstep=True)
+        rig = VirtualRig(profile, motion, bus, step_period_s=1.0 / rate_hz, lockstep=True, can_config=can_config)
         rig.table.start()
         cpu = np.empty(len(forces))
         now = 0.0
@@ -67,6 +73,7 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=20.0)
     parser.add_argument("--rate", type=float, default=500.0)
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE", help="profile override, every model")
     parser.add_argument("--json", default=str(REPO / "benchmarks" / "results" / "rig_cpu.json"))
     args = parser.parse_args()
     warm_up()
@@ -83,10 +90,10 @@ def main() -> None:
     results: dict[str, list[np.ndarray]] = {name: [] for name in MODELS}
     for _ in range(args.rounds):
         for name, overrides in MODELS.items():
-            results[name].append(rig_cpu(overrides, motion, args.rate, forces) * 1e6)
+            results[name].append(rig_cpu((*overrides, *args.set), motion, args.rate, forces) * 1e6)
     summary = {}
     print(f"rig CPU per control period at {args.rate:g} Hz ({period_us:.0f} us), record {args.record}, "
-          f"{args.duration:g} s, {args.rounds} rounds (median of rounds)")
+          f"{args.duration:g} s, {args.rounds} rounds (median of rounds){''.join(' --set ' + s for s in args.set)}")
     print(f"{'model':52s} {'median us':>10s} {'p99 us':>8s} {'max us':>8s} {'median %':>9s} {'p99 %':>6s}")
     for name, runs in results.items():
         medians = [float(np.median(r)) for r in runs]
@@ -102,6 +109,7 @@ def main() -> None:
     ratio = summary[names[1]]["median_us"] / summary[names[0]]["median_us"]
     print(f"servo-hydraulic / force source, median: {ratio:.2f}x")
     Path(args.json).write_text(json.dumps({"rate_hz": args.rate, "record": args.record, "duration_s": args.duration,
+                                           "set": args.set,
                                            "rounds": args.rounds, "models": summary, "ratio_median": ratio}, indent=2))
 
 

@@ -4,6 +4,7 @@ The drivers import nothing from :mod:`harness` (``tests/unit/test_architecture.p
 they take plain arguments, as ``can.Bus`` does, and the harness adapts its profile to them.
 
 - ``rig.dbc``: the protocol, one source of truth (messages, scales, ranges, value tables, E2E Data-IDs, version).
+- ``rig_fd.dbc``: its CAN FD variant (``can.fd``): the same messages as FD frames, plus SENSOR_SET.
 - :mod:`drivers.protocol_values`: the protocol version and the DBC's value tables as IntEnums (drive state, ...).
 - :mod:`drivers.errors`: :class:`~drivers.errors.DriverError` and its ProtocolError, BusError, BusLoadError.
 - :mod:`drivers.e2e`: CRC-8/2F and rolling counter (AUTOSAR E2E profile-2 style).

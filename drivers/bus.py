@@ -59,7 +59,11 @@ def kernel_has_socketcan() -> bool:
     return True
 
 
-def socketcan_preflight(channel: str, *, sys_net: Path = SYS_NET, kernel_ok: bool | None = None) -> None:
+#: MTU of a CAN interface that carries CAN FD frames (``struct canfd_frame``, bytes); classic CAN is 16.
+CANFD_MTU = 72
+
+
+def socketcan_preflight(channel: str, *, sys_net: Path = SYS_NET, kernel_ok: bool | None = None, fd: bool = False) -> None:
     """Check that a socketcan channel can be opened; raise a BusError that says how to fix it.
 
     Parameters
@@ -70,11 +74,14 @@ def socketcan_preflight(channel: str, *, sys_net: Path = SYS_NET, kernel_ok: boo
         Where network interfaces are listed (for tests).
     kernel_ok : bool, optional
         Override of :func:`kernel_has_socketcan` (for tests).
+    fd : bool
+        The bus must carry CAN FD frames: the interface's MTU must be :data:`CANFD_MTU` (72).
 
     Raises
     ------
     BusError
-        No SocketCAN in the kernel, no such interface, or the interface is down.
+        No SocketCAN in the kernel, no such interface, the interface is down, or (``fd``) its
+        MTU is too small for CAN FD frames.
     """
     if kernel_ok is None:
         kernel_ok = kernel_has_socketcan()
@@ -95,6 +102,14 @@ def socketcan_preflight(channel: str, *, sys_net: Path = SYS_NET, kernel_ok: boo
     flags = sys_net / channel / "flags"
     if flags.exists() and not int(flags.read_text().strip(), 0) & 0x1:  # IFF_UP
         raise BusError(f"CAN interface {channel!r} is down (operstate {_read(operstate)}); `ip link set up {channel}`")
+    mtu = sys_net / channel / "mtu"
+    if fd and mtu.exists() and int(mtu.read_text().strip()) < CANFD_MTU:
+        fix = (f"`ip link set {channel} down && ip link set {channel} mtu {CANFD_MTU} && ip link set up {channel}`" if virtual
+               else f"`ip link set {channel} up type can bitrate <bps> dbitrate <bps> fd on`")
+        raise BusError(
+            f"CAN interface {channel!r} has MTU {mtu.read_text().strip()}, too small for CAN FD frames (can.fd is true, "
+            f"expected MTU {CANFD_MTU}); {fix} (as root)"
+        )
 
 
 def _read(path: Path) -> str:
@@ -110,6 +125,8 @@ def open_bus(
     bitrate_bps: int | None = None,
     *,
     can_filters: Sequence[dict[str, Any]] | None = None,
+    fd: bool = False,
+    data_bitrate_bps: int | None = None,
     **kwargs: Any,
 ) -> can.BusABC:
     """Open a python-can bus, as ``can.Bus(interface=..., channel=..., bitrate=...)`` does.
@@ -124,6 +141,11 @@ def open_bus(
         Nominal bitrate (bit/s), for interfaces that set it (socketcan takes it from ``ip link``).
     can_filters : sequence of dict, optional
         python-can filters (``{"can_id": .., "can_mask": ..}``); default: receive everything.
+    fd : bool
+        Open the bus for CAN FD frames (python-can's ``fd=True``; socketcan needs an MTU of 72).
+    data_bitrate_bps : int, optional
+        Data-phase bitrate of CAN FD frames (bit/s), for interfaces that set it (python-can's
+        ``data_bitrate``; socketcan takes it from ``ip link``).
     **kwargs
         Passed to :class:`can.Bus` (e.g. ``receive_own_messages=True``).
 
@@ -139,7 +161,9 @@ def open_bus(
     """
     seqpacket.register()  # python-can knows it from the installed entry point; this, where that is not installed
     if interface == "socketcan":
-        socketcan_preflight(channel)
+        socketcan_preflight(channel, fd=fd)
+    if fd:
+        kwargs.update(fd=True, data_bitrate=data_bitrate_bps)
     try:
         return can.Bus(
             interface=interface,

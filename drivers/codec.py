@@ -1,4 +1,4 @@
-"""The CAN codec: ``drivers/rig.dbc`` compiled once into fast, allocation-light encoders and decoders.
+"""The CAN codec: ``drivers/rig.dbc`` (or its CAN FD variant ``rig_fd.dbc``) compiled once into fast encoders and decoders.
 
 cantools parses the DBC once (:func:`load_protocol`); every message is then compiled
 into a :class:`MessageCodec` that packs and unpacks its signals with plain integer
@@ -8,6 +8,12 @@ codecs bit for bit against cantools' own ``Message.encode``/``decode``.
 
 Values in this API are SI (m, m/s, m/s^2, N, s) in the DBC's signal order, without
 the ``crc`` and ``counter`` signals, which the codec owns (:mod:`drivers.e2e`).
+
+A DBC describes one frame format throughout: every message classic CAN (``rig.dbc``), or
+every message a CAN FD frame (``rig_fd.dbc``: ``BA_ "VFrameFormat"`` ``StandardCAN_FD`` on each
+message, which cantools reads as ``Message.is_fd``; ``BA_ "CANFD_BRS"`` whether its data phase
+switches to the data bit rate). :func:`load_protocol` refuses a mixed file, and one whose
+format is not the one the profile's ``can.fd`` asks for.
 
 The receive-side checks and counts live in :mod:`drivers.decoder`.
 """
@@ -26,8 +32,14 @@ from drivers.e2e import parse_data_ids, profile2_crc, protect
 from drivers.errors import ProtocolError
 from drivers.protocol_values import VALUE_TABLES, choices_of
 
-#: The packaged protocol description.
+#: The packaged protocol description (classic CAN).
 DEFAULT_DBC = Path(__file__).with_name("rig.dbc")
+#: Its CAN FD variant: the same messages as FD frames, plus SENSOR_SET.
+DEFAULT_FD_DBC = Path(__file__).with_name("rig_fd.dbc")
+#: Data-field lengths a classic CAN frame can have (bytes).
+CLASSIC_LENGTHS = frozenset(range(9))
+#: Data-field lengths a CAN FD frame can have (bytes; ISO 11898-1:2015, DLC 9..15 code 12..64).
+FD_LENGTHS = frozenset((*range(9), 12, 16, 20, 24, 32, 48, 64))
 #: Signals every message carries and the codec fills in itself.
 E2E_SIGNALS = ("crc", "counter")
 _F32 = struct.Struct("<f")
@@ -95,13 +107,17 @@ class MessageCodec:
         DLC in bytes.
     data_ids : tuple of int
         The 16 E2E profile-2 Data-IDs.
+    is_fd : bool
+        Sent as a CAN FD frame (the DBC's ``VFrameFormat``).
+    bitrate_switch : bool
+        An FD frame whose data phase runs at the data bit rate (the DBC's ``CANFD_BRS``; False for classic).
     signals : tuple of SignalLayout
         The payload signals, in DBC order.
     signal_names : tuple of str
         Their names.
     """
 
-    def __init__(self, message: cantools.database.can.Message, data_ids: tuple[int, ...]):
+    def __init__(self, message: cantools.database.can.Message, data_ids: tuple[int, ...], bitrate_switch: bool = False):
         names = [s.name for s in message.signals]
         for required, start, length in (("crc", 0, 8), ("counter", 8, 4)):
             sig = message.get_signal_by_name(required) if required in names else None
@@ -111,6 +127,13 @@ class MessageCodec:
         self.frame_id: int = message.frame_id
         self.length: int = message.length
         self.data_ids = data_ids
+        self.is_fd: bool = bool(message.is_fd)
+        self.bitrate_switch: bool = self.is_fd and bool(bitrate_switch)
+        lengths = FD_LENGTHS if self.is_fd else CLASSIC_LENGTHS
+        if self.length not in lengths:
+            kind = "a CAN FD" if self.is_fd else "a classic CAN"
+            raise ProtocolError(f"{message.name}: {self.length} data bytes is not a length {kind} frame has; "
+                                f"expected one of {', '.join(map(str, sorted(lengths)))}")
         self.signals = tuple(_compile_signal(s, message.name) for s in message.signals if s.name not in E2E_SIGNALS)
         self.signal_names = tuple(s.name for s in self.signals)
         self._index = {name: i for i, name in enumerate(self.signal_names)}
@@ -239,6 +262,8 @@ class Protocol:
         The parsed DBC (for tools and tests; the tick never touches it).
     messages : dict of str to MessageCodec
     by_id : dict of int to MessageCodec
+    fd : bool
+        Every message is a CAN FD frame (a DBC never mixes the two formats).
     """
 
     def __init__(self, database: cantools.database.can.Database, path: Path):
@@ -257,9 +282,21 @@ class Protocol:
                 data_ids = parse_data_ids(str(attrs["E2EDataIDs"].value), message.name)
             except ValueError as err:
                 raise ProtocolError(f"{path}: {err}") from err
-            self.messages[message.name] = MessageCodec(message, data_ids)
+            self.messages[message.name] = MessageCodec(message, data_ids, _bitrate_switch(database, message))
         self.by_id: dict[int, MessageCodec] = {m.frame_id: m for m in self.messages.values()}
+        self.fd = self._frame_format()
         self._check_value_tables()
+
+    def _frame_format(self) -> bool:
+        """True when every message is an FD frame, False when none is; a mixed DBC is refused."""
+        fd = [name for name, codec in self.messages.items() if codec.is_fd]
+        if fd and len(fd) != len(self.messages):
+            classic = next(name for name, codec in self.messages.items() if not codec.is_fd)
+            raise ProtocolError(
+                f"{self.path}: {fd[0]} is a CAN FD frame but {classic} a classic one; "
+                "expected one frame format for every message (drivers/rig.dbc classic, drivers/rig_fd.dbc FD)"
+            )
+        return bool(fd)
 
     def value_table(self, message: str, signal: str) -> dict[int, str]:
         """The DBC's ``VAL_`` table of ``message.signal`` as ``{raw value: name}`` (empty if it has none).
@@ -316,33 +353,54 @@ class Protocol:
             raise ProtocolError(f"no message {name!r} in {self.path.name}; expected one of: {', '.join(self.messages)}") from err
 
 
+def _bitrate_switch(database: cantools.database.can.Database, message: cantools.database.can.Message) -> bool:
+    """The message's ``CANFD_BRS`` attribute, or the DBC's default for it (no attribute: no switch)."""
+    attrs = message.dbc.attributes if message.dbc is not None else {}
+    if "CANFD_BRS" in attrs:
+        return str(attrs["CANFD_BRS"].value) == "1"
+    definitions = database.dbc.attribute_definitions if database.dbc is not None else {}
+    definition = definitions.get("CANFD_BRS")
+    return definition is not None and str(definition.default_value) == "1"
+
+
 def _describe(choices: Mapping[int, str]) -> str:
     """``0 "OFF" 1 "READY" ...``, a value table as the DBC writes it."""
     return " ".join(f'{value} "{name}"' for value, name in sorted(choices.items()))
 
 
-def load_protocol(path: str | Path | None = None) -> Protocol:
+def load_protocol(path: str | Path | None = None, *, fd: bool | None = None) -> Protocol:
     """Parse a DBC with cantools and compile it (call once, at configure time).
 
     Parameters
     ----------
     path : str or Path, optional
-        The DBC; default :data:`DEFAULT_DBC` (``drivers/rig.dbc``).
+        The DBC; default :data:`DEFAULT_DBC` (``drivers/rig.dbc``), or :data:`DEFAULT_FD_DBC`
+        (``drivers/rig_fd.dbc``) when ``fd`` is True.
+    fd : bool, optional
+        The frame format the caller expects (the profile's ``can.fd``); None accepts either.
 
     Raises
     ------
     ProtocolError
-        If the file is missing, does not parse, or breaks the protocol's conventions (a value
-        table that names a signal's values otherwise than :mod:`drivers.protocol_values` included).
+        If the file is missing, does not parse, breaks the protocol's conventions (a value
+        table that names a signal's values otherwise than :mod:`drivers.protocol_values` included,
+        classic and FD messages mixed), or describes the other frame format than ``fd``.
     """
-    dbc = Path(path) if path else DEFAULT_DBC
+    dbc = Path(path) if path else DEFAULT_FD_DBC if fd else DEFAULT_DBC
     text = _read_dbc_text(dbc)
     try:
         database = cantools.database.load_string(text, database_format="dbc")
     except Exception as err:  # cantools raises several unrelated types for a bad file
         raise ProtocolError(f"{dbc}: not a readable DBC file: {_printable(str(err))}") from err
     assert isinstance(database, cantools.database.can.Database), "a DBC file loads as a CAN database"
-    return Protocol(database, dbc)
+    protocol = Protocol(database, dbc)
+    if fd is not None and protocol.fd != fd:
+        found, expected = ("CAN FD", "classic CAN") if protocol.fd else ("classic CAN", "CAN FD")
+        raise ProtocolError(
+            f"{dbc} describes {found} frames but can.fd is {'true' if fd else 'false'}, which expects {expected} "
+            f"(the packaged {DEFAULT_FD_DBC.name if fd else DEFAULT_DBC.name}); set can.fd to match the DBC"
+        )
+    return protocol
 
 
 #: Largest DBC file read (bytes); the rig's DBC is about 10 kB.

@@ -3,9 +3,10 @@
 :class:`Decoder` keeps, per received message, the rolling-counter state
 (:class:`~drivers.e2e.CounterCheck`), a preallocated list of the latest accepted
 SI values, and counts per :class:`RxStatus`. Checks, in order: known ID, data
-frame, length, CRC (with the counter's Data-ID), counter, value ranges. The
-counter is checked before the ranges so that a genuine frame with a bad value
-still advances the counter state (no double count on the next frame).
+frame in the message's format (classic or CAN FD, as the DBC says), length, CRC (with
+the counter's Data-ID), counter, value ranges. The counter is checked before the ranges
+so that a genuine frame with a bad value still advances the counter state (no double
+count on the next frame).
 """
 
 from __future__ import annotations
@@ -104,7 +105,9 @@ class Decoder:
         except KeyError as err:
             raise ProtocolError(f"this decoder does not receive {name!r}; it receives: {', '.join(self._by_name)}") from err
 
-    def decode(self, frame_id: int, data: bytes | bytearray, *, is_data_frame: bool = True, extended: bool = False) -> RxStatus:
+    def decode(
+        self, frame_id: int, data: bytes | bytearray, *, is_data_frame: bool = True, extended: bool = False, fd: bool = False,
+    ) -> RxStatus:
         """Check and decode one frame; never raises.
 
         On ``OK`` the message's :meth:`values` list is updated in place; on a
@@ -117,9 +120,12 @@ class Decoder:
         data : bytes-like
             Payload.
         is_data_frame : bool
-            False for remote, error or CAN FD frames (rejected as ``NOT_DATA``).
+            False for remote or error frames (rejected as ``NOT_DATA``).
         extended : bool
             A 29-bit identifier: never one of the protocol's (``UNKNOWN_ID``).
+        fd : bool
+            The frame is a CAN FD frame; one whose format is not the message's (an FD frame on a
+            classic ID, a classic frame on an FD ID) is rejected as ``NOT_DATA``.
         """
         state = None if extended else self._states.get(frame_id)
         if state is None:
@@ -127,7 +133,7 @@ class Decoder:
             return self._count(None, RxStatus.UNKNOWN_ID)
         codec = state.codec
         self.last = codec
-        if not is_data_frame:
+        if not is_data_frame or fd != codec.is_fd:
             return self._count(state, RxStatus.NOT_DATA)
         if len(data) != codec.length:
             return self._count(state, RxStatus.WRONG_LENGTH)

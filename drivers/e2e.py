@@ -6,6 +6,9 @@ Frame layout shared by every message of ``drivers/rig.dbc``:
   ``Crc8H2F``; init 0xFF, final xor 0xFF, not reflected; check value 0xDF over ``b"123456789"``);
 - bits 8-11 (low nibble of byte 1): the rolling counter 0..15.
 
+The same layout protects the CAN FD messages of ``drivers/rig_fd.dbc``, the 32-byte
+SENSOR_SET included: nothing here depends on the length (the CRC covers the whole payload).
+
 The CRC covers bytes 1..DLC-1 followed by one Data-ID byte, picked from the
 message's 16-entry Data-ID list by the counter (profile 2). A frame routed to the
 wrong message, or one whose counter nibble was corrupted, therefore fails the CRC

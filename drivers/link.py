@@ -37,6 +37,8 @@ def prepare(
     max_bus_load: float = 0.5,
     protocol_version: int = CURRENT_PROTOCOL_VERSION,
     dbc_path: str | Path | None = None,
+    fd: bool = False,
+    data_bitrate_bps: int | None = None,
 ) -> tuple[Protocol, BusLoad]:
     """Load the DBC and check version and bus load, without touching the bus.
 
@@ -51,18 +53,23 @@ def prepare(
     protocol_version : int
         The ``ProtocolVersion`` the DBC must have.
     dbc_path : str or Path, optional
-        The DBC; None or empty means the packaged ``drivers/rig.dbc``.
+        The DBC; None or empty means the packaged ``drivers/rig.dbc`` (``drivers/rig_fd.dbc`` with ``fd``).
+    fd : bool
+        The CAN FD variant of the protocol: the DBC must describe FD frames, and the bus load counts FD timing.
+    data_bitrate_bps : int, optional
+        Data-phase bitrate of the FD frames (bit/s); default the nominal one.
 
     Raises
     ------
     ProtocolError
-        The DBC is unreadable or its ProtocolVersion differs from ``protocol_version``.
+        The DBC is unreadable, its ProtocolVersion differs from ``protocol_version``, or its
+        frame format is not the one ``fd`` asks for.
     BusLoadError
         The rates need more than ``max_bus_load`` of the bitrate.
     """
-    protocol = load_protocol(dbc_path or None)
+    protocol = load_protocol(dbc_path or None, fd=fd)
     check_protocol_version(protocol, protocol_version)
-    load = check_bus_load(protocol, rates_hz, bitrate_bps, max_bus_load)
+    load = check_bus_load(protocol, rates_hz, bitrate_bps, max_bus_load, data_bitrate_bps if fd else None)
     return protocol, load
 
 
@@ -74,12 +81,16 @@ def _checked_bus(
     max_bus_load: float,
     protocol_version: int,
     dbc_path: str | Path | None,
+    fd: bool = False,
+    data_bitrate_bps: int | None = None,
 ) -> tuple[can.BusABC, Protocol, BusLoad, BusHealth]:
     """What both sides do before their reader and writer: :func:`prepare`, then open the bus, with a fresh health."""
     protocol, load = prepare(
-        rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path
+        rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path,
+        fd=fd, data_bitrate_bps=data_bitrate_bps,
     )
-    return open_bus(interface, channel, bitrate_bps), protocol, load, BusHealth()
+    bus = open_bus(interface, channel, bitrate_bps, fd=fd, data_bitrate_bps=data_bitrate_bps)
+    return bus, protocol, load, BusHealth()
 
 
 @dataclass
@@ -134,6 +145,8 @@ def open_harness(
     dbc_path: str | Path | None = None,
     use_msg_timestamp: bool = False,
     max_frames_per_poll: int = 256,
+    fd: bool = False,
+    data_bitrate_bps: int | None = None,
 ) -> HarnessLink:
     """Check the settings, then open the bus for the harness side.
 
@@ -141,8 +154,8 @@ def open_harness(
     ----------
     interface, channel : str
         The python-can interface and channel (see :func:`drivers.bus.open_bus`).
-    bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path
-        As for :func:`prepare`.
+    bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps
+        As for :func:`prepare`; with ``fd`` the bus is opened for CAN FD frames.
     use_msg_timestamp : bool
         The reader takes a frame's receive time from ``msg.timestamp`` instead of ``poll``'s ``now``.
     max_frames_per_poll : int
@@ -156,7 +169,7 @@ def open_harness(
         The bus cannot be opened (says how to fix it).
     """
     bus, protocol, load, health = _checked_bus(
-        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path
+        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps
     )
     reader = HarnessReader(bus, protocol, health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames_per_poll)
     return HarnessLink(bus, protocol, load, health, reader, HarnessWriter(bus, protocol, health))
@@ -171,9 +184,11 @@ def open_rig(
     max_bus_load: float = 0.5,
     protocol_version: int = CURRENT_PROTOCOL_VERSION,
     dbc_path: str | Path | None = None,
+    fd: bool = False,
+    data_bitrate_bps: int | None = None,
 ) -> RigLink:
     """Check the settings, then open the bus for the rig side (the virtual rig); parameters as :func:`prepare`."""
     bus, protocol, load, health = _checked_bus(
-        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path
+        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps
     )
     return RigLink(bus, protocol, load, health, RigWriter(bus, protocol, health))

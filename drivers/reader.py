@@ -15,6 +15,11 @@ frame through the :class:`~drivers.codec.Decoder`, and updates preallocated
 - E-stop frames: a valid frame with ``active=1`` latches :attr:`FrameReader.estop_requested`,
   and so does any malformed frame on the E-stop ID (fail-safe: a stop request
   that arrives damaged is still a stop request). Only :meth:`FrameReader.clear_estop` clears it;
+- on the CAN FD protocol, SENSOR_SET: a frame carries the payloads of TABLE_SENSORS, BASE_SENSORS,
+  STORY_DRIFTS and FLOOR_ACCELS (:data:`SENSOR_SET_PARTS`), and the reader hands each part to that
+  message's :class:`Sample` as if the message itself had arrived (values, time, freshness, status),
+  so nothing downstream knows which protocol carried them. An intact frame with a value out of
+  range poisons the control measurements (table and base mat), whichever block held it;
 - the E-stop panel's heartbeat: the panel (``source`` 3) sends ESTOP frames with ``active=0``
   while not pressed; :meth:`FrameReader.panel_age` is the age of its newest frame that passed
   every E2E check. The harness's own ESTOP frames (source 4, supervisor) are never received
@@ -38,6 +43,10 @@ from drivers.protocol_values import DriveState, EstopSource
 
 #: What the harness receives (sensors, actuator status, rig status, E-stop).
 HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
+#: What the harness receives on the CAN FD protocol: the same, and SENSOR_SET, the whole sensor set in one frame.
+HARNESS_RX_FD = (*HARNESS_RX, "SENSOR_SET")
+#: SENSOR_SET's signals in blocks of three, in order: the message each block is the payload of.
+SENSOR_SET_PARTS = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS")
 #: What the rig (servo controller and virtual rig) receives (:class:`drivers.rig_reader.RigReader`).
 RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP", "DRIVE_RESET")
 ESTOP_MESSAGE = "ESTOP"
@@ -227,6 +236,41 @@ class FrameReader:
         self._estop_active = estop.index("active") if estop is not None else 0
         self._estop_source = estop.index("source") if estop is not None else 0
         self._estop_scratch = [0.0] * (len(estop.signals) if estop is not None else 0)
+        self._set_id, self._set_parts = self._sensor_set_parts(protocol, names)
+
+    def _sensor_set_parts(self, protocol: Protocol, names: Sequence[str]) -> tuple[int, tuple[tuple[Sample, int, bool], ...]]:
+        """SENSOR_SET's ID and, per part, the receiving :class:`Sample`, the part's first index, whether it poisons.
+
+        ``(-1, ())`` when this reader does not receive SENSOR_SET.
+        """
+        if "SENSOR_SET" not in names:
+            return -1, ()
+        codec = protocol["SENSOR_SET"]
+        parts = []
+        for name in SENSOR_SET_PARTS:
+            part = protocol[name]
+            start = codec.index(part.signal_names[0])
+            if codec.signal_names[start : start + len(part.signal_names)] != part.signal_names:
+                raise ProtocolError(
+                    f"SENSOR_SET does not carry the signals of {name} in its order ({', '.join(part.signal_names)})"
+                )
+            parts.append((self.sample(name), start, part.frame_id in self._poison_ids))
+        return codec.frame_id, tuple(parts)
+
+    def _spread(self, status: RxStatus, t: float) -> None:
+        """Hand a SENSOR_SET frame's parts to their messages' samples, as if each had arrived at ``t``."""
+        values = self._samples[self._set_id].values
+        for sample, start, poisons in self._set_parts:
+            sample.last_status = status
+            if status == RxStatus.OK:
+                target = sample.values
+                for i in range(len(target)):
+                    target[i] = values[start + i]
+                sample.rx_time = t
+                sample.count += 1
+                sample.fresh = True
+            elif status == RxStatus.OUT_OF_RANGE and poisons:
+                self._poison(sample, t)
 
     def sample(self, name: str) -> Sample:
         """The :class:`Sample` of message ``name`` (the same object for the whole run)."""
@@ -346,7 +390,7 @@ class FrameReader:
             return
         extended = msg.is_extended_id
         status = self.decoder.decode(
-            frame_id, msg.data, is_data_frame=not (msg.is_remote_frame or msg.is_fd), extended=extended
+            frame_id, msg.data, is_data_frame=not msg.is_remote_frame, extended=extended, fd=msg.is_fd
         )
         sample = None if extended else self._samples.get(frame_id)
         if sample is not None:
@@ -357,7 +401,9 @@ class FrameReader:
                 sample.fresh = True
             elif status == RxStatus.OUT_OF_RANGE and frame_id in self._poison_ids:
                 self._poison(sample, t)
-        if frame_id == self._estop_id and not extended:
+        if frame_id == self._set_id and not extended:
+            self._spread(status, t)
+        elif frame_id == self._estop_id and not extended:
             self._note_estop(status, msg.data, t)
 
     @staticmethod
@@ -388,6 +434,8 @@ class FrameReader:
 class HarnessReader(FrameReader):
     """The harness side: sensors, actuator status, rig status, E-stop; foreign actuator commands.
 
+    On the CAN FD protocol it receives SENSOR_SET too, into the four sensor messages' samples.
+
     Parameters
     ----------
     bus : can.BusABC
@@ -405,7 +453,7 @@ class HarnessReader(FrameReader):
         use_msg_timestamp: bool = False, max_frames: int = 256,
     ):
         super().__init__(
-            bus, protocol, HARNESS_RX, foreign=("ACTUATOR_CMD",), health=health,
+            bus, protocol, HARNESS_RX_FD if protocol.fd else HARNESS_RX, foreign=("ACTUATOR_CMD",), health=health,
             use_msg_timestamp=use_msg_timestamp, max_frames=max_frames, poison_on_invalid=CONTROL_MEASUREMENTS,
         )
         self.table = self.sample("TABLE_SENSORS")

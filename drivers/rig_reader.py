@@ -110,7 +110,8 @@ class RigReader:
                 self.decoder.reset_counter(frame_id)
             self._last_heard[frame_id] = now
         status = self.decoder.decode(
-            msg.arbitration_id, msg.data, is_data_frame=not (msg.is_remote_frame or msg.is_fd), extended=msg.is_extended_id
+            msg.arbitration_id, msg.data, is_data_frame=not msg.is_remote_frame, extended=msg.is_extended_id,
+            fd=msg.is_fd,
         )
         kind = OTHER if msg.is_extended_id else self._kinds.get(msg.arbitration_id, OTHER)
         if kind == ESTOP:

@@ -27,6 +27,8 @@ from drivers.protocol_values import EstopSource
 HARNESS_TX = ("ACTUATOR_CMD", "HEARTBEAT", "ESTOP", "RIG_CONTROL", "DRIVE_RESET")
 #: What the rig (servo controller and virtual rig) sends.
 RIG_TX = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACTUATOR_STATUS", "RIG_STATUS", "ESTOP")
+#: What it sends on the CAN FD protocol besides: the whole sensor set in one frame.
+RIG_TX_FD = (*RIG_TX, "SENSOR_SET")
 STEP_INDEX_MODULO = 1 << 24
 
 
@@ -37,7 +39,8 @@ class TxFrame:
     ----------
     codec : MessageCodec
     msg : can.Message
-        The reused frame (its ``data`` is rewritten in place).
+        The reused frame (its ``data`` is rewritten in place); a CAN FD frame, with the bit-rate
+        switch the DBC names, where the message is one.
     counter : int
         The counter the next frame will carry (0..15).
     sent : int
@@ -50,7 +53,7 @@ class TxFrame:
         self.codec = codec
         self.msg = can.Message(
             arbitration_id=codec.frame_id, is_extended_id=False, dlc=codec.length, data=bytearray(codec.length),
-            is_rx=False,
+            is_rx=False, is_fd=codec.is_fd, bitrate_switch=codec.bitrate_switch,
         )
         self.counter = 0
         self.sent = 0
@@ -69,10 +72,16 @@ class FrameWriter:
         Messages this node sends (:data:`HARNESS_TX` or :data:`RIG_TX`).
     health : BusHealth, optional
         Shared with the reader; a new one by default.
+
+    Attributes
+    ----------
+    fd : bool
+        The protocol is the CAN FD variant (every frame an FD frame).
     """
 
     def __init__(self, bus: can.BusABC, protocol: Protocol, names: Sequence[str], health: BusHealth | None = None):
         self.bus = bus
+        self.fd = protocol.fd
         self.health = health if health is not None else BusHealth()
         self._frames = {name: TxFrame(protocol[name]) for name in names}
         channel = getattr(bus, "channel_id", getattr(bus, "channel", None))  # virtual: channel_id
@@ -177,10 +186,13 @@ class HarnessWriter(FrameWriter):
 
 
 class RigWriter(FrameWriter):
-    """The rig side (virtual rig / sensor concentrator / servo controller): sensors and status."""
+    """The rig side (virtual rig / sensor concentrator / servo controller): sensors and status.
+
+    On the CAN FD protocol (``protocol.fd``) it also sends SENSOR_SET (:meth:`sensor_set`).
+    """
 
     def __init__(self, bus: can.BusABC, protocol: Protocol, health: BusHealth | None = None):
-        super().__init__(bus, protocol, RIG_TX, health)
+        super().__init__(bus, protocol, RIG_TX_FD if protocol.fd else RIG_TX, health)
         self._table = self.frame("TABLE_SENSORS")
         self._base = self.frame("BASE_SENSORS")
         self._drifts = self.frame("STORY_DRIFTS")
@@ -212,6 +224,11 @@ class RigWriter(FrameWriter):
     def accels(self, a1: float, a2: float, a3: float, now: float) -> bool:
         """Send FLOOR_ACCELS: absolute accelerations of floors 1-3 (m/s^2)."""
         return self._send3(self._accels, a1, a2, a3, now)
+
+    def sensor_set(self, values: Sequence[float], now: float) -> bool:
+        """Send SENSOR_SET (CAN FD protocol only): x_0, xdot_0, xddot_0, y_b, ydot_b, yddot_b (m, m/s, m/s^2),
+        drift_1..3 (m), accel_1..3 (m/s^2), in that order."""
+        return self.send("SENSOR_SET", values, now)
 
     def estop(self, active: bool, now: float, source: int = EstopSource.RIG, reason: int = 0) -> bool:
         """Send ESTOP from the rig (``source`` ``EstopSource.RIG`` or ``EstopSource.SERVO``)."""

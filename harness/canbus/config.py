@@ -1,8 +1,10 @@
 """The ``can:`` section of a profile: interface, channel, bitrate, protocol version and message rates.
 
 Defaults fit 500 Hz control on a 1 Mbit/s bus with about 30 % load (see
-:mod:`drivers.busload`). Every periodic message of ``drivers/rig.dbc`` takes its
-rate from one field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
+:mod:`drivers.busload`). ``fd: true`` selects the CAN FD variant of the protocol
+(``drivers/rig_fd.dbc``): every frame an FD frame with bit-rate switching, the whole sensor set in
+one SENSOR_SET frame. Every periodic message of ``drivers/rig.dbc`` takes its rate from one
+field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
 control, drive reset) are budgeted at the rate they may burst at.
 
 The section is the harness's (built and checked by :mod:`harness.config.schema`); the
@@ -33,6 +35,11 @@ RATE_FIELDS: dict[str, str] = {
     "DRIVE_RESET": "rig_control_rate_hz",  # one frame before arming; budgeted as the other harness event message
 }
 
+#: The CAN FD protocol (``can.fd: true``, ``drivers/rig_fd.dbc``): SENSOR_SET carries the whole sensor
+#: set at the sensor rate, in place of the four classic sensor messages, which are then not sent (0 Hz).
+FD_RATE_FIELDS: dict[str, str] = {"SENSOR_SET": "sensor_rate_hz"}
+FD_REPLACED: tuple[str, ...] = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS")
+
 #: Further senders of a message, each at its own rate (Hz): the ESTOP ID carries the harness's
 #: (or any node's) active stop at ``estop_rate_hz`` and the panel's heartbeat at ``estop_panel_rate_hz``.
 EXTRA_RATE_FIELDS: dict[str, tuple[str, ...]] = {"ESTOP": ("estop_panel_rate_hz",)}
@@ -49,7 +56,23 @@ class CanConfig:
     channel : str
         Interface channel: ``vcan0``/``can0`` for socketcan, a shared name for virtual.
     bitrate_bps : int
-        Nominal bitrate (bit/s). socketcan takes it from ``ip link``; it still sets the bus-load budget.
+        Nominal bitrate (bit/s): the whole classic frame, the arbitration phase of an FD frame.
+        socketcan takes it from ``ip link``; it still sets the bus-load budget.
+    fd : bool
+        Use the CAN FD variant of the protocol (``drivers/rig_fd.dbc``). False, the default, keeps
+        classic CAN, which every CAN controller speaks; a bus with a classic-only node must stay classic.
+    data_bitrate_bps : int
+        Data-phase bitrate of FD frames (bit/s; ignored for classic CAN). 5 Mbit/s by default:
+        the highest data rate ISO 11898-2:2016 specifies transceiver timing for, so common CAN FD
+        transceivers and adapters run it; the data phase of a 32-byte sensor set (358 bits worst
+        case) then takes 72 us, and 2 kHz control loads the bus 33.5 % (worst case,
+        :mod:`drivers.busload`), inside the default ``max_bus_load`` of 50 % with room for error
+        frames and retransmissions. 2 Mbit/s would load it 60.7 % at 2 kHz (refused; 32.4 % at
+        1 kHz), 4 Mbit/s 38.1 %. The data phase has no arbitration, so the cable's round trip does
+        not bound it as it bounds the nominal rate; a short, terminated lab bus (the harness's
+        adapter, the rig's sensor concentrator and the servo controller, a few metres) carries it
+        with the controllers' transmitter delay compensation on. Lower it for a longer bus or
+        long stubs, and the loop rate with it.
     max_bus_load : float
         Largest allowed share of the bitrate (0..1) the configured messages may need.
     protocol_version : int
@@ -70,7 +93,9 @@ class CanConfig:
 
     interface: str = quantity("virtual", doc="python-can interface (virtual, socketcan, pcan, kvaser, ...)")
     channel: str = quantity("harness", doc="interface channel, e.g. vcan0, can0, PCAN_USBBUS1")
-    bitrate_bps: int = quantity(1_000_000, gt=0, le=1_000_000, doc="CAN bitrate (classic CAN)")
+    bitrate_bps: int = quantity(1_000_000, gt=0, le=1_000_000, doc="CAN bitrate (classic CAN; the nominal rate of CAN FD)")
+    fd: bool = quantity(False, doc="CAN FD variant of the protocol (drivers/rig_fd.dbc): true or false")
+    data_bitrate_bps: int = quantity(5_000_000, gt=0, le=8_000_000, doc="CAN FD data-phase bitrate (bit/s)")
     max_bus_load: float = quantity(0.5, gt=0.0, le=1.0, doc="largest allowed share of the bitrate")
     protocol_version: int = quantity(CURRENT_PROTOCOL_VERSION, ge=0, doc="ProtocolVersion the profile expects of the DBC")
     sensor_rate_hz: float = quantity(500.0, unit="Hz", gt=0.0, le=10_000.0, doc="TABLE_SENSORS and BASE_SENSORS rate")
@@ -95,13 +120,22 @@ class CanConfig:
             raise ValueError("interface is empty; expected a python-can interface name such as 'virtual' or 'socketcan'")
         if not self.channel.strip():
             raise ValueError("channel is empty; expected a channel such as 'vcan0'")
+        if self.fd and self.data_bitrate_bps < self.bitrate_bps:
+            raise ValueError(
+                f"data_bitrate_bps ({self.data_bitrate_bps}) is below bitrate_bps ({self.bitrate_bps}); "
+                "expected a CAN FD data rate at least the nominal rate"
+            )
 
     def rates_hz(self) -> dict[str, float]:
         """Message name -> configured rate (Hz), for every message in :data:`RATE_FIELDS`.
 
         A message with several senders (:data:`EXTRA_RATE_FIELDS`) gets the sum of their rates.
+        With :attr:`fd`, SENSOR_SET takes the sensor rate and the messages it replaces 0 Hz.
         """
         rates = {name: float(getattr(self, field)) for name, field in RATE_FIELDS.items()}
+        if self.fd:
+            rates.update({name: float(getattr(self, field)) for name, field in FD_RATE_FIELDS.items()})
+            rates.update(dict.fromkeys(FD_REPLACED, 0.0))
         for name, fields in EXTRA_RATE_FIELDS.items():
             rates[name] += sum(float(getattr(self, field)) for field in fields)
         return rates

@@ -18,11 +18,13 @@ from harness.canbus.config import CanConfig
 
 
 def protocol_arguments(config: CanConfig) -> dict[str, Any]:
-    """What :func:`drivers.link.prepare` takes besides rates and bitrate: allowed load, version, DBC path."""
+    """What :func:`drivers.link.prepare` takes besides rates and bitrate: allowed load, version, DBC path, CAN FD."""
     return {
         "max_bus_load": config.max_bus_load,
         "protocol_version": config.protocol_version,
         "dbc_path": config.dbc_path or None,
+        "fd": config.fd,
+        "data_bitrate_bps": config.data_bitrate_bps,
     }
 
 

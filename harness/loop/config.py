@@ -13,7 +13,7 @@ class LoopConfig:
     """How the control loop runs a test."""
 
     rate_hz: float = quantity(500.0, unit="Hz", gt=0, le=5000, doc="tick rate of the loop")
-    spin_s: float = quantity(200e-6, unit="s", ge=0, doc="busy-wait before each deadline")
+    spin_s: float = quantity(200e-6, unit="s", ge=0, doc="busy-wait before each deadline (at most a tenth of the period)")
     arm_timeout_s: float = quantity(3.0, unit="s", gt=0, doc="how long to wait for every pre-arm check to pass")
     settle_s: float = quantity(0.2, unit="s", ge=0, doc="ARMED time before the table starts")
     tail_s: float = quantity(1.0, unit="s", ge=0, doc="RUNNING time after the record ends")

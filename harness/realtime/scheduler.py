@@ -16,6 +16,13 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+#: Largest share of the period spent busy-waiting before a deadline: the spin holds at most a tenth
+#: of a core at any rate (200 us at 500 Hz, 100 us at 1 kHz, 50 us at 2 kHz, with ``loop.spin_s``
+#: 200 us). At 2 kHz a 200 us spin held 40 % of a core at real-time priority: with the tick's own
+#: compute and the rig's thread the run's real-time threads came near the kernel's throttle (95 % of
+#: the machine), which stops them all for 50 ms, and beside another real-time run they hit it.
+MAX_SPIN_SHARE = 0.1
+
 
 class FixedRateScheduler:
     """Wakes the loop at ``t0 + k * period``.
@@ -25,7 +32,8 @@ class FixedRateScheduler:
     period_s : float
         Tick period (s).
     spin_s : float
-        Busy-wait this long before each deadline (s); 0 disables spinning.
+        Busy-wait this long before each deadline (s), at most :data:`MAX_SPIN_SHARE` of the period;
+        0 disables spinning.
     clock : callable
         Monotonic clock in seconds (default ``time.perf_counter``).
     sleep : callable
@@ -57,7 +65,7 @@ class FixedRateScheduler:
         if period_s <= 0:
             raise ValueError(f"period {period_s} s; expected > 0")
         self.period_s = float(period_s)
-        self.spin_s = max(0.0, min(float(spin_s), self.period_s / 2))
+        self.spin_s = max(0.0, min(float(spin_s), self.period_s * MAX_SPIN_SHARE))
         self._clock = clock
         self._sleep = sleep
         self._start = 0.0

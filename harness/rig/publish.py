@@ -6,6 +6,11 @@ silence, dropout, corrupted CRC and repeated/skipped rolling counters
 first, which applies stuck values, sign flips, spikes and noise bursts and saturates every
 value at its DBC range (a real transducer saturates; the codec would refuse it).
 Frames are the writer's preallocated :class:`~drivers.writer.TxFrame` objects.
+
+On the CAN FD protocol the four sensor messages travel together in one SENSOR_SET frame
+(:meth:`RigPublisher.sensor_set`): each message's values are measured and faulted as before
+(stuck, sign flip, spike, noise burst, per target), and a frame-level fault (dropout, corrupted
+CRC, repeated or skipped counter) of any of the four acts on the one frame that carries them all.
 """
 
 from __future__ import annotations
@@ -21,12 +26,18 @@ from harness.rig.faults import (
     DROPOUT,
     NOISE_BURST,
     REPEAT_COUNTER,
+    SENSOR_TARGETS,
     SKIP_COUNTER,
     STUCK,
     TARGETS,
     FaultSet,
 )
 from harness.rig.sensors import MESSAGE_COLUMNS, SensorModel
+
+#: The sensor messages' targets, which SENSOR_SET carries together.
+_SENSOR_SET_TARGETS = tuple(range(SENSOR_TARGETS))
+#: Each message's target on its own, for the frame-level faults of a message sent alone.
+_ALONE = tuple((target,) for target in range(len(TARGETS)))
 
 
 class RigPublisher:
@@ -52,6 +63,10 @@ class RigPublisher:
         self.panel_sent = 0
         self.sent = [0] * len(TARGETS)
         self.suppressed = 0
+        #: The CAN FD protocol: the sensor messages go out together as SENSOR_SET.
+        self.fd = writer.fd
+        self._set = writer.frame("SENSOR_SET") if self.fd else None
+        self._set_values = [0.0] * (3 * SENSOR_TARGETS)
 
     def _clip(self, target: int) -> None:
         values = self._values[target]
@@ -61,10 +76,14 @@ class RigPublisher:
 
     def sensor(self, target: int, now: float) -> bool:
         """Measure and send sensor message ``target`` (0..3); False if nothing went out."""
+        return self.send(target, self._measure(target), now)
+
+    def _measure(self, target: int) -> list[float]:
+        """The values sensor message ``target`` (0..3) carries now, with its value-level faults applied."""
         faults = self.faults
         values = self._values[target]
         if faults.is_on(STUCK, target):
-            return self.send(target, values, now)  # the values last sent, again
+            return values  # the values last sent, again
         burst = faults.param[NOISE_BURST, target] if faults.is_on(NOISE_BURST, target) else 0.0
         self.sensors.read(MESSAGE_COLUMNS[target], values, abs(burst))
         flipped = faults.flipped_signal(target)
@@ -72,7 +91,27 @@ class RigPublisher:
             values[flipped] = -values[flipped]
         values[0] += faults.take_spike(target)
         self._clip(target)
-        return self.send(target, values, now)
+        return values
+
+    def sensor_set(self, now: float) -> bool:
+        """CAN FD protocol: measure the four sensor messages and send them as one SENSOR_SET frame.
+
+        Each target's values are measured as :meth:`sensor` measures them; the frame-level faults of
+        targets 0..3 act on the one frame. False if nothing went out.
+        """
+        tx = self._set
+        if tx is None:
+            raise ValueError("SENSOR_SET is a message of the CAN FD protocol; this rig's bus is classic (can.fd is false)")
+        values = self._set_values
+        for target in _SENSOR_SET_TARGETS:
+            measured = self._measure(target)
+            base = 3 * target
+            values[base], values[base + 1], values[base + 2] = measured[0], measured[1], measured[2]
+        ok = self._send_faulted(tx, _SENSOR_SET_TARGETS, values, now)
+        if ok:
+            for target in _SENSOR_SET_TARGETS:
+                self.sent[target] += 1
+        return ok
 
     def status(self, force_N: float, drive_state: int, pressure_ok: bool, fault_code: int, now: float) -> bool:
         """Send ACTUATOR_STATUS (target 4)."""
@@ -113,22 +152,32 @@ class RigPublisher:
 
     def send(self, target: int, values: list[float], now: float) -> bool:
         """Send message ``target`` with ``values``, applying the frame-level faults."""
-        faults = self.faults
-        if faults.is_on(BUS_SILENCE) or faults.is_on(DROPOUT, target):
-            self.suppressed += 1
-            return False
-        tx = self.frames[target]
-        if faults.is_on(REPEAT_COUNTER, target) and tx.sent:
-            tx.counter = (tx.counter - 1) % COUNTER_MODULO
-        elif faults.is_on(SKIP_COUNTER, target):
-            tx.counter = (tx.counter + 1) % COUNTER_MODULO
-        if faults.is_on(CORRUPT_CRC, target):
-            ok = self._send_corrupted(tx, values, now)
-        else:
-            ok = self.writer.send_frame(tx, values, now)
+        ok = self._send_faulted(self.frames[target], _ALONE[target], values, now)
         if ok:
             self.sent[target] += 1
         return ok
+
+    def _on(self, kind: int, targets: tuple[int, ...]) -> bool:
+        """Fault ``kind`` is on for one of ``targets`` (a loop, not ``any()``: no generator per frame)."""
+        is_on = self.faults.is_on
+        for target in targets:
+            if is_on(kind, target):
+                return True
+        return False
+
+    def _send_faulted(self, tx: TxFrame, targets: tuple[int, ...], values: list[float], now: float) -> bool:
+        """Send ``tx`` with ``values``, applying the frame-level faults of ``targets`` (the messages it carries)."""
+        faults = self.faults
+        if faults.is_on(BUS_SILENCE) or self._on(DROPOUT, targets):
+            self.suppressed += 1
+            return False
+        if self._on(REPEAT_COUNTER, targets) and tx.sent:
+            tx.counter = (tx.counter - 1) % COUNTER_MODULO
+        elif self._on(SKIP_COUNTER, targets):
+            tx.counter = (tx.counter + 1) % COUNTER_MODULO
+        if self._on(CORRUPT_CRC, targets):
+            return self._send_corrupted(tx, values, now)
+        return self.writer.send_frame(tx, values, now)
 
     def _send_corrupted(self, tx: TxFrame, values: list[float], now: float) -> bool:
         msg = tx.msg

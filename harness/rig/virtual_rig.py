@@ -10,6 +10,9 @@ Two ways to run (see :mod:`harness.rig` for the lockstep contract):
   (STORY_DRIFTS, FLOOR_ACCELS every k-th step), ACTUATOR_STATUS and, last,
   RIG_STATUS with ``step_index`` = steps taken.
 
+On the CAN FD protocol (``can.fd``) the four sensor messages go out as one SENSOR_SET frame,
+every step in lockstep and at the sensor rate in real time.
+
 Time: the rig's own time is an integer count of sub-steps; ``now`` (wall clock,
 passed in) is used only for the drive watchdog, frame timestamps and, in real
 time, to know how far to advance.
@@ -104,8 +107,9 @@ class VirtualRig:
             raise ModelError(f"step period {step_period_s} s is not a whole multiple of the physics sub-step {self.h} s")
         self.step_period_s = float(step_period_s)
         self.clock = clock
+        can_settings = can_config or CanConfig()
         if isinstance(bus_or_link, can.BusABC):
-            self.bus, protocol = bus_or_link, load_protocol()
+            self.bus, protocol = bus_or_link, load_protocol(can_settings.dbc_path or None, fd=can_settings.fd)
             writer = RigWriter(self.bus, protocol)
         else:
             self.bus, protocol, writer = bus_or_link.bus, bus_or_link.protocol, bus_or_link.writer
@@ -119,7 +123,6 @@ class VirtualRig:
         self.publisher = RigPublisher(writer, self.faults, self.sensors)
         self.reader = RigReader(self.bus, protocol, clock)
         self.history = History(int(math.ceil(cfg.history_s / self.h)), self.table.y.size)
-        can_settings = can_config or CanConfig()
         self.schedule = PublishSchedule(can_settings, self.h, self.step_period_s)
         #: The emulated E-stop panel is plugged in and sends its heartbeat (tests unplug it).
         self.panel_connected = True
@@ -262,11 +265,14 @@ class VirtualRig:
         self._announce = False
         self._last_status_time = now
         pub = self.publisher
-        pub.sensor(0, now)
-        pub.sensor(1, now)
-        if self.step_index % self.schedule.story_every_steps == 0:
-            pub.sensor(2, now)
-            pub.sensor(3, now)
+        if pub.fd:
+            pub.sensor_set(now)
+        else:
+            pub.sensor(0, now)
+            pub.sensor(1, now)
+            if self.step_index % self.schedule.story_every_steps == 0:
+                pub.sensor(2, now)
+                pub.sensor(3, now)
         self._publish_status(now)
         if self.faults.is_on(ESTOP):
             pub.estop(now)
@@ -302,10 +308,13 @@ class VirtualRig:
     def _publish_due(self, now: float) -> None:
         due = self.schedule.due(self.n)
         pub = self.publisher
-        if due.sensors:
+        if pub.fd:  # the whole set in one frame, at the sensor rate
+            if due.sensors:
+                pub.sensor_set(now)
+        elif due.sensors:
             pub.sensor(0, now)
             pub.sensor(1, now)
-        if due.stories:
+        if due.stories and not pub.fd:
             pub.sensor(2, now)
             pub.sensor(3, now)
         if due.status:

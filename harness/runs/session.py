@@ -130,7 +130,10 @@ def _metadata(profile: Profile, settings: SessionSettings) -> dict:
         "controller": profile.control.controller,
         "rate_hz": profile.control.rate_hz,
         "lockstep": settings.lockstep,
-        "can": {"interface": settings.can.interface, "channel": settings.can.channel, "bitrate_bps": settings.can.bitrate_bps},
+        "can": {
+            "interface": settings.can.interface, "channel": settings.can.channel, "bitrate_bps": settings.can.bitrate_bps,
+            "fd": settings.can.fd, "data_bitrate_bps": settings.can.data_bitrate_bps if settings.can.fd else None,
+        },
         "total_weight_N": profile.structure.total_weight_N,
         "stroke_soft_limit_m": stroke.soft_limit_m,
         "stroke_hard_limit_m": stroke.hard_limit_m,

@@ -76,7 +76,8 @@ def run_rig_twin(
         published up to one period earlier, and the rig applies a command at its next
         service, up to one period later: on average one period in all. 0 matches lockstep.
     story_rate_hz : float, optional
-        Rate of the story sensors (drifts, floor accelerations); default the profile's CAN rate.
+        Rate of the story sensors (drifts, floor accelerations); default the profile's CAN rate, or
+        ``rate_hz`` on the CAN FD protocol (``can.fd``: the whole sensor set comes every period).
     lockstep : bool
         Round sensor delays to whole controller steps, as the rig does in lockstep.
     duration_s : float, optional
@@ -121,7 +122,8 @@ def run_rig_twin(
     supervisor.start(0.0)
     span_s = motion.duration_s if duration_s is None else min(duration_s, motion.duration_s)
     samples = CaseSamples(int(round(span_s * rate_hz)), rig.table.y.size, _RECORDED)
-    story_every = max(1, int(round(rate_hz / (story_rate_hz or profile.can.story_sensor_rate_hz))))
+    story_rate = story_rate_hz or (rate_hz if profile.can.fd else profile.can.story_sensor_rate_hz)
+    story_every = max(1, int(round(rate_hz / story_rate)))
     true_state = profile.structure.n_stories * 2 + 2 if offline_true_state else 0
     samples.run(rig.table, _twin_sample(rig, controller, compensator, estimator, supervisor, health, samples.values, period,
                                         story_every, true_state))
