@@ -590,3 +590,23 @@ def test_a_disagreement_on_the_table_is_reported_on_the_table() -> None:
     else:
         pytest.fail("the disagreement must be caught")
     assert "x_0" in det.detail(health) and "y_b" not in det.detail(health)
+
+
+def test_pair_checks_start_quietly_at_an_offset_and_before_any_sample() -> None:
+    for det in (SensorDisagree(SENSORS), SensorSignFlip(SENSORS)):
+        health = TickHealth()
+        health.table_fresh = health.base_fresh = False
+        assert det.update(0.0, DT, health) is False, "nothing received yet"
+        health.table_fresh = health.base_fresh = True
+        health.meas.table_displacement_m = health.meas.base_displacement_m = 0.05  # at rest, off centre
+        for k in range(1, 300):
+            assert det.update(k * DT, DT, health) is False, (type(det).__name__, k)
+
+
+def test_a_new_low_pass_is_primed_by_its_first_input_and_a_new_tracker_expects_zero() -> None:
+    from harness.safety.detector_base import LowPass
+
+    lag = LowPass(0.01)
+    assert (lag.y, lag.primed) == (0.0, False)
+    assert lag.update(3.0, 0.001) == 3.0
+    assert ForceTracking(ForceConfig(actuator_time_constant_s=0.01)).expected_N() == 0.0
