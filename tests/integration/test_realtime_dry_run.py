@@ -32,13 +32,17 @@ def _harness(*args: str, timeout_s: float = 300.0) -> subprocess.CompletedProces
     )
 
 
-@pytest.fixture(scope="module")
-def realtime_run(tmp_path_factory) -> tuple[subprocess.CompletedProcess, Path]:
-    log_dir = tmp_path_factory.mktemp("realtime")
-    done = _harness("dry-run", "--duration", str(DURATION_S), "--quiet", "--log-dir", str(log_dir))
+def quiet_dry_run(log_dir: Path, *args: str) -> tuple[subprocess.CompletedProcess, Path]:
+    """A quiet real-time ``harness dry-run`` of DURATION_S into ``log_dir``: its process and its run folder."""
+    done = _harness("dry-run", *args, "--duration", str(DURATION_S), "--quiet", "--log-dir", str(log_dir))
     folders = sorted(p for p in log_dir.iterdir() if p.is_dir())
     assert folders, done.stdout + done.stderr
     return done, folders[-1]
+
+
+@pytest.fixture(scope="module")
+def realtime_run(tmp_path_factory) -> tuple[subprocess.CompletedProcess, Path]:
+    return quiet_dry_run(tmp_path_factory.mktemp("realtime"))
 
 
 def test_the_default_real_time_dry_run_completes(realtime_run):

@@ -10,9 +10,7 @@ complete on the machine that runs the suite, as the 500 Hz run of test_realtime_
 from __future__ import annotations
 
 import json
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import can
@@ -22,23 +20,15 @@ import pytest
 from harness import exit_codes
 from harness.recording import load_run
 from harness.safety.lifecycle import State
+from tests.integration.test_realtime_dry_run import DURATION_S, quiet_dry_run
 
-DURATION_S = 10.0
 RATE_HZ = 2000
 SENSOR_SET_ID, TABLE_ID, COMMAND_ID = 0x32, 0x30, 0x20
 
 
 @pytest.fixture(scope="module")
 def fd_run(tmp_path_factory) -> tuple[subprocess.CompletedProcess, Path]:
-    log_dir = tmp_path_factory.mktemp("realtime_fd")
-    done = subprocess.run(
-        [sys.executable, "-m", "harness.cli", "dry-run", "--rate", str(RATE_HZ), "--set", "can.fd=true",
-         "--duration", str(DURATION_S), "--quiet", "--log-dir", str(log_dir)],
-        capture_output=True, text=True, timeout=300.0, env={**os.environ, "COLUMNS": "120"},
-    )
-    folders = sorted(p for p in log_dir.iterdir() if p.is_dir())
-    assert folders, done.stdout + done.stderr
-    return done, folders[-1]
+    return quiet_dry_run(tmp_path_factory.mktemp("realtime_fd"), "--rate", str(RATE_HZ), "--set", "can.fd=true")
 
 
 def test_the_2_khz_fd_real_time_dry_run_completes(fd_run):

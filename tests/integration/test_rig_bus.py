@@ -66,13 +66,16 @@ def quiet_config(**changes) -> RigConfig:
 class Bench:
     """A rig, a harness link and a raw listener on one fresh virtual channel, with a made-up clock."""
 
-    def __init__(self, profile, motion, config: RigConfig, *, lockstep: bool = True, seed: int = 0):
-        can_config = CanConfig(channel=f"rig-{uuid.uuid4().hex[:10]}")
+    def __init__(self, profile, motion, config: RigConfig, *, lockstep: bool = True, seed: int = 0,
+                 can_config: CanConfig | None = None, period_s: float = PERIOD):
+        can_config = can_config or CanConfig(channel=f"rig-{uuid.uuid4().hex[:10]}")
+        self.period_s = period_s
         self.rig_link = open_rig(can_config)
         self.link = open_harness(can_config)
         self.listener = can.Bus(interface="virtual", channel=can_config.channel)
         parts = RigParts(profile.structure, profile.bearing, config, profile.simulation.rtol)
-        self.rig = VirtualRig(parts, motion, self.rig_link, step_period_s=PERIOD, lockstep=lockstep, seed=seed)
+        self.rig = VirtualRig(parts, motion, self.rig_link, step_period_s=period_s, lockstep=lockstep, seed=seed,
+                              can_config=can_config)
         self.now = 0.0
         self.reader, self.writer = self.link.reader, self.link.writer
 
@@ -100,12 +103,13 @@ class Bench:
         for _ in range(n):
             self.writer.heartbeat(1, self.now)
             self.writer.command(force, enable, self.now)
-            self.service(PERIOD)
+            self.service(self.period_s)
 
-    def frames(self) -> list[can.Message]:
+    def frames(self, every_id: bool = False) -> list[can.Message]:
+        """The frames on the bus since the last call: the rig's sensor and status frames, or ``every_id``."""
         out = []
         while (msg := self.listener.recv(timeout=0)) is not None:
-            if msg.arbitration_id in IDS.values():
+            if every_id or msg.arbitration_id in IDS.values():
                 out.append(msg)
         return out
 

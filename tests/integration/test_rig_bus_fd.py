@@ -19,13 +19,14 @@ from drivers.decoder import RxStatus
 from drivers.e2e import protect
 from drivers.protocol_values import RigCommand
 from harness.canbus.config import CanConfig
-from harness.canbus.link import open_harness, open_rig
+from harness.canbus.link import open_rig
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig
 from harness.rig.faults import fault_id_for
 from harness.rig.virtual_rig import RigParts, VirtualRig
 from harness.runs.options import StudyOptions, prepare_motion
 from tests.conftest import PROFILES
+from tests.integration.test_rig_bus import Bench
 
 PERIOD = 0.0005  # 2 kHz, one physics sub-step
 SENSOR_SET_ID, TABLE_ID, BASE_ID, DRIFTS_ID, ACCELS_ID = 0x32, 0x30, 0x31, 0x200, 0x201
@@ -41,47 +42,20 @@ def motion(profile):
     return prepare_motion(profile, StudyOptions(record="synthetic", duration_s=2.0))
 
 
-class FdBench:
-    """A rig and a harness link on one fresh virtual channel with the FD protocol, and a raw listener."""
+class FdBench(Bench):
+    """The bench of tests/integration/test_rig_bus.py on a fresh virtual channel with the FD protocol at 2 kHz."""
 
     def __init__(self, profile, motion):
-        self.can = CanConfig(channel=f"fd-{uuid.uuid4().hex[:10]}", fd=True, sensor_rate_hz=2000.0, command_rate_hz=2000.0)
-        self.rig_link = open_rig(self.can)
-        self.link = open_harness(self.can)
-        self.listener = can.Bus(interface="virtual", channel=self.can.channel)
+        can_config = CanConfig(channel=f"fd-{uuid.uuid4().hex[:10]}", fd=True, sensor_rate_hz=2000.0,
+                               command_rate_hz=2000.0)
         config = RigConfig(actuator=ActuatorConfig(model="ideal", force_rate_limit_N_per_s=1e9),
                            drive=DriveConfig(watchdog_timeout_s=10.0))
-        parts = RigParts(profile.structure, profile.bearing, config, profile.simulation.rtol)
-        self.rig = VirtualRig(parts, motion, self.rig_link, step_period_s=PERIOD, lockstep=True, can_config=self.can)
-        self.now = 0.0
-        self.reader, self.writer = self.link.reader, self.link.writer
+        super().__init__(profile, motion, config, can_config=can_config, period_s=PERIOD)
+        self.can = can_config
 
-    def close(self) -> None:
-        self.listener.shutdown()
-        self.link.close()
-        self.rig_link.close()
-
-    def service(self, dt: float = 0.0) -> None:
-        self.now += dt
-        self.rig.service(self.now)
-        self.reader.poll(self.now)
-
-    def start(self) -> None:
-        self.writer.heartbeat(1, self.now)
-        self.writer.rig_control(RigCommand.START_TABLE, True, self.now)
-        self.service()
-
-    def step(self, force: float = 0.0, n: int = 1) -> None:
-        for _ in range(n):
-            self.writer.heartbeat(1, self.now)
-            self.writer.command(force, True, self.now)
-            self.service(PERIOD)
-
-    def frames(self) -> list[can.Message]:
-        out = []
-        while (msg := self.listener.recv(timeout=0)) is not None:
-            out.append(msg)
-        return out
+    def frames(self, every_id: bool = True) -> list[can.Message]:
+        """Every frame on the bus since the last call."""
+        return super().frames(every_id)
 
 
 @pytest.fixture

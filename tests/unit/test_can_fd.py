@@ -13,32 +13,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drivers.codec import DEFAULT_DBC, DEFAULT_FD_DBC, MessageCodec, load_protocol
+from drivers.codec import DEFAULT_DBC, DEFAULT_FD_DBC, load_protocol
 from drivers.decoder import Decoder, RxStatus
 from drivers.e2e import protect
 from drivers.errors import ProtocolError
 from drivers.reader import SENSOR_SET_PARTS
+from tests.unit.test_codec import protected, raw_values
 
 CLASSIC = load_protocol()
 FD = load_protocol(fd=True)
 FD_NAMES = sorted(FD.messages)
-
-
-def raw_values(codec: MessageCodec) -> st.SearchStrategy[list[float]]:
-    """SI values exactly on the DBC grid, anywhere in each signal's [min, max]."""
-    parts = []
-    for sig in codec.signals:
-        if sig.is_float:
-            parts.append(st.floats(sig.minimum, sig.maximum, width=32))
-        else:
-            parts.append(st.integers(sig.raw_min, sig.raw_max).map(lambda r, s=sig: r * s.scale + s.offset))
-    return st.tuples(*parts).map(list)
-
-
-def protected(codec: MessageCodec, values: list[float], counter: int = 0) -> bytearray:
-    data = bytearray(codec.length)
-    codec.encode_into(data, values, counter)
-    return data
 
 
 def test_the_fd_dbc_is_every_classic_message_as_an_fd_frame_plus_the_sensor_set() -> None:

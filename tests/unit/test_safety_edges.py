@@ -12,6 +12,7 @@ import dataclasses
 import math
 import re
 
+import numpy as np
 import pytest
 
 from harness.errors import ProfileError
@@ -610,3 +611,33 @@ def test_a_new_low_pass_is_primed_by_its_first_input_and_a_new_tracker_expects_z
     assert (lag.y, lag.primed) == (0.0, False)
     assert lag.update(3.0, 0.001) == 3.0
     assert ForceTracking(ForceConfig(actuator_time_constant_s=0.01)).expected_N() == 0.0
+
+
+def test_a_new_persistence_counts_from_the_conditions_first_appearance() -> None:
+    timer = Persistence(0.1)
+    assert timer.active is False
+    assert timer.update(5.0, True) is False, "held 0 s, however late it first appears"
+    assert timer.update(5.1, True) is True
+
+
+def test_the_table_checks_summary_keeps_its_measures_rounded_to_their_stated_digits() -> None:
+    period_s = 1.0 / 300.0  # a period with many decimals: times are not whole microseconds
+    t = np.arange(0.0, 7.995, period_s)  # 2399 samples: the time compared is not a whole number of ms either
+    rng = np.random.default_rng(5)
+    told = sum(rng.normal() * np.sin(2 * np.pi * f * t + rng.uniform(0, 6.28)) for f in rng.uniform(0.5, 4.0, 20))
+    told = 0.1 * told / np.std(told)
+    table = 0.93 * np.interp(t - 0.008, t, told, left=0.0) + 0.02 * np.sin(2 * np.pi * 7.3 * t)  # gain, lag, a hum
+    check = TableRecordCheck(0.02)
+    check.expect(told, period_s, (told.size - 1) * period_s, period_s)
+    for n, value in enumerate(table):
+        check.update(n * period_s, float(value))
+    summary = check.summary()
+    tracking = check.tracking
+    assert tracking is not None and 0.9 < tracking.correlation < 0.9999, "an imperfect match, every digit in use"
+    assert summary["gate_s"] == round(check.gate_s, 6) != round(check.gate_s, 7)
+    assert summary["record_s_compared"] == round(tracking.count * period_s, 6) != round(tracking.count * period_s, 7)
+    assert summary["judged_at_s"] == round(check.worst_at_s, 6)
+    assert summary["final"] == {"correlation": round(tracking.correlation, 4), "delay_s": round(tracking.delay_s, 6),
+                                "amplitude_ratio": round(tracking.amplitude_ratio, 4)}
+    assert isinstance(summary["final"]["correlation"], float) and summary["final"]["correlation"] < 1.0
+    assert summary["final"]["amplitude_ratio"] != round(tracking.amplitude_ratio, 5)
