@@ -535,8 +535,9 @@ def test_a_pair_starts_from_its_velocity_and_again_after_a_gap_exactly_as_long_a
     det.update(0.25, 0.25, health)
     health.base_fresh = True
     health.meas.base_displacement_m = 1.0  # 2 m/s over the gap, were it differentiated
+    health.meas.base_velocity_m_s = 0.3
     det.update(0.5, 0.25, health)
-    assert (det._deriv[1].y, det._vel[1].y) == (0.1, 0.1), "a span of the persistence time is a gap: start again"
+    assert (det._deriv[1].y, det._vel[1].y) == (0.3, 0.3), "a span of the persistence time is a gap: start again"
 
 
 def test_a_missed_sample_widens_the_span_the_derivative_is_taken_over() -> None:
@@ -641,3 +642,11 @@ def test_the_table_checks_summary_keeps_its_measures_rounded_to_their_stated_dig
                                 "amplitude_ratio": round(tracking.amplitude_ratio, 4)}
     assert isinstance(summary["final"]["correlation"], float) and summary["final"]["correlation"] < 1.0
     assert summary["final"]["amplitude_ratio"] != round(tracking.amplitude_ratio, 5)
+
+
+def test_a_disagreement_exactly_at_the_tolerance_is_within_it() -> None:
+    det = SensorDisagree(SENSORS)
+    det._deriv[1].y, det._vel[1].y = SENSORS.disagree_tolerance_m_s, 0.0
+    assert det._bad(1) is False
+    det._deriv[1].y = 1.5 * SENSORS.disagree_tolerance_m_s
+    assert det._bad(1) is True
