@@ -650,3 +650,27 @@ def test_a_disagreement_exactly_at_the_tolerance_is_within_it() -> None:
     assert det._bad(1) is False
     det._deriv[1].y = 1.5 * SENSORS.disagree_tolerance_m_s
     assert det._bad(1) is True
+
+
+def test_an_event_ring_of_one_hands_on_a_single_event() -> None:
+    ring = EventRing(1)
+    ring.push(1.0, "state", "ARMED", "only")
+    drained: list[tuple[float, str, str, str]] = []
+    assert ring.drain(lambda *event: drained.append(event)) == 1
+    assert drained == [(1.0, "state", "ARMED", "only")] and ring.overwritten == 0
+
+
+def test_the_list_of_checks_is_put_in_bit_order_and_a_gap_or_a_repeat_is_refused() -> None:
+    from harness.safety.checks import CHECKS_BY_BIT, _in_bit_order
+
+    assert _in_bit_order(tuple(reversed(CHECKS_BY_BIT))) == CHECKS_BY_BIT
+    gap = tuple(check for check in CHECKS_BY_BIT if check.bit_number != 3)
+    n = len(gap)
+    with pytest.raises(RuntimeError) as refused:
+        _in_bit_order(gap)
+    assert str(refused.value) == (f"safety check bits are {[c.bit_number for c in gap]}; expected each of "
+                                  f"0..{n - 1} once")
+    repeat = (*CHECKS_BY_BIT[:-1], CHECKS_BY_BIT[-1]._replace(kind=CHECKS_BY_BIT[0].kind))
+    with pytest.raises(RuntimeError) as repeated:
+        _in_bit_order(repeat)
+    assert str(repeated.value) == f"safety check names repeat: {[c.name for c in repeat]}"
