@@ -24,6 +24,10 @@ from enum import IntEnum
 #: The ``ProtocolVersion`` of the packaged ``drivers/rig.dbc``.
 CURRENT_PROTOCOL_VERSION = 1
 
+#: CAN FD protocol (``drivers/rig_fd.dbc``): the messages whose payloads SENSOR_SET carries, in its
+#: order, three signals each; on that protocol they are not sent on their own.
+SENSOR_SET_PARTS: tuple[str, ...] = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS")
+
 
 class EstopSource(IntEnum):
     """ESTOP ``source``: who requested the stop."""

@@ -39,14 +39,12 @@ from drivers.codec import MessageCodec, Protocol
 from drivers.decoder import Decoder, RxStatus
 from drivers.errors import BusError, ProtocolError
 from drivers.measurements import Measurements
-from drivers.protocol_values import DriveState, EstopSource
+from drivers.protocol_values import SENSOR_SET_PARTS, DriveState, EstopSource
 
 #: What the harness receives (sensors, actuator status, rig status, E-stop).
 HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
 #: What the harness receives on the CAN FD protocol: the same, and SENSOR_SET, the whole sensor set in one frame.
 HARNESS_RX_FD = (*HARNESS_RX, "SENSOR_SET")
-#: SENSOR_SET's signals in blocks of three, in order: the message each block is the payload of.
-SENSOR_SET_PARTS = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS")
 #: What the rig (servo controller and virtual rig) receives (:class:`drivers.rig_reader.RigReader`).
 RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP", "DRIVE_RESET")
 ESTOP_MESSAGE = "ESTOP"

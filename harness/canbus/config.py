@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from drivers.protocol_values import CURRENT_PROTOCOL_VERSION
+from drivers.protocol_values import CURRENT_PROTOCOL_VERSION, SENSOR_SET_PARTS
 from harness.config.schema import quantity
 
 #: DBC message name -> the CanConfig field holding its rate (Hz).
@@ -36,9 +36,9 @@ RATE_FIELDS: dict[str, str] = {
 }
 
 #: The CAN FD protocol (``can.fd: true``, ``drivers/rig_fd.dbc``): SENSOR_SET carries the whole sensor
-#: set at the sensor rate, in place of the four classic sensor messages, which are then not sent (0 Hz).
+#: set at the sensor rate, in place of the four classic sensor messages (``SENSOR_SET_PARTS``), which
+#: are then not sent (0 Hz).
 FD_RATE_FIELDS: dict[str, str] = {"SENSOR_SET": "sensor_rate_hz"}
-FD_REPLACED: tuple[str, ...] = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS")
 
 #: Further senders of a message, each at its own rate (Hz): the ESTOP ID carries the harness's
 #: (or any node's) active stop at ``estop_rate_hz`` and the panel's heartbeat at ``estop_panel_rate_hz``.
@@ -135,7 +135,7 @@ class CanConfig:
         rates = {name: float(getattr(self, field)) for name, field in RATE_FIELDS.items()}
         if self.fd:
             rates.update({name: float(getattr(self, field)) for name, field in FD_RATE_FIELDS.items()})
-            rates.update(dict.fromkeys(FD_REPLACED, 0.0))
+            rates.update(dict.fromkeys(SENSOR_SET_PARTS, 0.0))
         for name, fields in EXTRA_RATE_FIELDS.items():
             rates[name] += sum(float(getattr(self, field)) for field in fields)
         return rates

@@ -18,7 +18,7 @@ from __future__ import annotations
 import can
 
 from drivers.e2e import COUNTER_MODULO
-from drivers.protocol_values import EstopSource
+from drivers.protocol_values import SENSOR_SET_PARTS, EstopSource
 from drivers.writer import RigWriter, TxFrame
 from harness.rig.faults import (
     BUS_SILENCE,
@@ -26,7 +26,6 @@ from harness.rig.faults import (
     DROPOUT,
     NOISE_BURST,
     REPEAT_COUNTER,
-    SENSOR_TARGETS,
     SKIP_COUNTER,
     STUCK,
     TARGETS,
@@ -34,8 +33,8 @@ from harness.rig.faults import (
 )
 from harness.rig.sensors import MESSAGE_COLUMNS, SensorModel
 
-#: The sensor messages' targets, which SENSOR_SET carries together.
-_SENSOR_SET_TARGETS = tuple(range(SENSOR_TARGETS))
+#: The targets of the messages SENSOR_SET carries together, in its order.
+_SENSOR_SET_TARGETS = tuple(TARGETS.index(name) for name in SENSOR_SET_PARTS)
 #: Each message's target on its own, for the frame-level faults of a message sent alone.
 _ALONE = tuple((target,) for target in range(len(TARGETS)))
 
@@ -66,13 +65,28 @@ class RigPublisher:
         #: The CAN FD protocol: the sensor messages go out together as SENSOR_SET.
         self.fd = writer.fd
         self._set = writer.frame("SENSOR_SET") if self.fd else None
-        self._set_values = [0.0] * (3 * SENSOR_TARGETS)
+        self._set_values = [0.0] * (3 * len(_SENSOR_SET_TARGETS))
 
     def _clip(self, target: int) -> None:
         values = self._values[target]
         for i, (lo, hi) in enumerate(self._ranges[target]):
             value = values[i]
             values[i] = lo if value < lo else hi if value > hi else value
+
+    def sensor_messages(self, now: float, table_and_base: bool, stories: bool) -> None:
+        """Send the sensor messages that are due: on classic CAN the table and base-mat messages
+        (targets 0, 1) and the story messages (2, 3) each when due; on the CAN FD protocol the whole
+        set as one SENSOR_SET frame, at the table and base-mat rate (:meth:`sensor_set`)."""
+        if self.fd:
+            if table_and_base:
+                self.sensor_set(now)
+            return
+        if table_and_base:
+            self.sensor(0, now)
+            self.sensor(1, now)
+        if stories:
+            self.sensor(2, now)
+            self.sensor(3, now)
 
     def sensor(self, target: int, now: float) -> bool:
         """Measure and send sensor message ``target`` (0..3); False if nothing went out."""
@@ -103,9 +117,9 @@ class RigPublisher:
         if tx is None:
             raise ValueError("SENSOR_SET is a message of the CAN FD protocol; this rig's bus is classic (can.fd is false)")
         values = self._set_values
-        for target in _SENSOR_SET_TARGETS:
+        for part, target in enumerate(_SENSOR_SET_TARGETS):
             measured = self._measure(target)
-            base = 3 * target
+            base = 3 * part
             values[base], values[base + 1], values[base + 2] = measured[0], measured[1], measured[2]
         ok = self._send_faulted(tx, _SENSOR_SET_TARGETS, values, now)
         if ok:

@@ -265,14 +265,7 @@ class VirtualRig:
         self._announce = False
         self._last_status_time = now
         pub = self.publisher
-        if pub.fd:
-            pub.sensor_set(now)
-        else:
-            pub.sensor(0, now)
-            pub.sensor(1, now)
-            if self.step_index % self.schedule.story_every_steps == 0:
-                pub.sensor(2, now)
-                pub.sensor(3, now)
+        pub.sensor_messages(now, True, self.step_index % self.schedule.story_every_steps == 0)
         self._publish_status(now)
         if self.faults.is_on(ESTOP):
             pub.estop(now)
@@ -308,15 +301,7 @@ class VirtualRig:
     def _publish_due(self, now: float) -> None:
         due = self.schedule.due(self.n)
         pub = self.publisher
-        if pub.fd:  # the whole set in one frame, at the sensor rate
-            if due.sensors:
-                pub.sensor_set(now)
-        elif due.sensors:
-            pub.sensor(0, now)
-            pub.sensor(1, now)
-        if due.stories and not pub.fd:
-            pub.sensor(2, now)
-            pub.sensor(3, now)
+        pub.sensor_messages(now, due.sensors, due.stories)
         if due.status:
             self._publish_status(now)
             if self.faults.is_on(ESTOP):
