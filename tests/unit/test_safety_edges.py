@@ -16,10 +16,11 @@ import numpy as np
 import pytest
 
 from harness.errors import ProfileError
+from harness.loop.status import LoopStatus
 from harness.loop.tick import ControlTick
 from harness.loop.trip_outputs import TripOutputs
 from harness.safety.actuator_detectors import CompensationFault, ForceTracking
-from harness.safety.checks import CHECK_NAMES, bit
+from harness.safety.checks import CHECK_NAMES, CHECKS_BY_BIT, _in_bit_order, bit
 from harness.safety.config import (
     TRIP_CLASS_OF,
     TRIP_CLASSES,
@@ -30,7 +31,7 @@ from harness.safety.config import (
     TripActionsConfig,
     check_config,
 )
-from harness.safety.detector_base import TIME_EPS_S, Persistence, WindowCounter
+from harness.safety.detector_base import TIME_EPS_S, LowPass, Persistence, WindowCounter
 from harness.safety.events import Action, EventRing
 from harness.safety.health import TickHealth
 from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
@@ -41,9 +42,12 @@ from harness.safety.sensor_detectors import SensorDisagree, SensorJump, SensorSi
 from harness.safety.supervisor import Supervisor
 from harness.safety.table_record import NO_RECORD, TableRecordCheck
 from tests.unit.test_control_tick import PERIOD_S, Bench
+from tests.unit.test_prearm_words import _healthy
 from tests.unit.test_trip_actions import BOTH, EVERY, RecordingWriter, TableStop
 
 STROKE = StrokeConfig()
+#: A fade band wider than the soft-to-hard gap: a configuration check_config refuses.
+BAND_PAST_HARD_LIMIT = StrokeConfig(soft_limit_m=0.07, fade_band_m=0.01, hard_limit_m=0.075)
 SENSORS = SensorConfig()
 DT = 0.001
 
@@ -234,8 +238,6 @@ def test_an_exception_in_recording_trips_at_the_ticks_time_naming_the_exception(
 
 
 def test_each_event_reaches_the_recorder_and_the_console_with_its_time(bench) -> None:
-    from harness.loop.status import LoopStatus
-
     recorded: list[tuple[float, str, str, str]] = []
 
     class Recorder:
@@ -260,15 +262,9 @@ def test_each_event_reaches_the_recorder_and_the_console_with_its_time(bench) ->
 
 
 # ------------------------------------------------------------------ pre-arm: ages on their bounds, words, all failures
-def _armable() -> TickHealth:
-    from tests.unit.test_prearm_words import _healthy
-
-    return _healthy()
-
-
 def test_ages_exactly_on_their_bounds_arm() -> None:
     config = SafetyConfig()
-    health = _armable()
+    health = _healthy()
     health.table_age_s = health.base_age_s = config.sensors.max_sensor_age_s
     health.actuator_status_age_s = config.actuator.max_status_age_s
     health.estop_panel_age_s = config.estop.max_panel_age_s
@@ -279,7 +275,7 @@ def test_ages_exactly_on_their_bounds_arm() -> None:
 
 def test_the_refusals_give_large_ages_in_milliseconds() -> None:
     config = SafetyConfig()
-    health = _armable()
+    health = _healthy()
     health.base_age_s = 0.5
     health.estop_panel_age_s = 0.5
     failed = pre_arm_failures(config, health)
@@ -288,9 +284,9 @@ def test_the_refusals_give_large_ages_in_milliseconds() -> None:
 
 
 def test_a_refusal_lists_a_configuration_problem_with_the_sensor_failures_after_it() -> None:
-    config = dataclasses.replace(SafetyConfig(), stroke=StrokeConfig(soft_limit_m=0.07, fade_band_m=0.01, hard_limit_m=0.075))
+    config = dataclasses.replace(SafetyConfig(), stroke=BAND_PAST_HARD_LIMIT)
     assert check_config(config), "the fade band reaches past the hard limit"
-    health = _armable()
+    health = _healthy()
     health.e2e_ok = False
     names = [line.split(":")[0] for line in pre_arm_failures(config, health)]
     assert names[0] == "config" and names[-1] == "e2e_ok"
@@ -367,7 +363,7 @@ def test_a_new_supervisor_has_no_stop_reason() -> None:
 
 
 def test_an_inconsistent_configuration_is_refused_naming_the_safety_section_and_every_problem() -> None:
-    config = dataclasses.replace(SafetyConfig(), stroke=StrokeConfig(soft_limit_m=0.07, fade_band_m=0.01, hard_limit_m=0.075),
+    config = dataclasses.replace(SafetyConfig(), stroke=BAND_PAST_HARD_LIMIT,
                                  trip_actions=TripActionsConfig(stroke=("disable", "disable")))
     problems = check_config(config)
     assert len(problems) == 2
@@ -447,14 +443,11 @@ def test_the_force_tracking_check_takes_its_action_from_the_profile_and_starts_f
 
 
 def test_the_stall_budget_refusal_gives_each_time_in_milliseconds_and_the_remedy() -> None:
-    from harness.safety.config import RunConfig
-
     base = SafetyConfig()
     config = dataclasses.replace(base, run=dataclasses.replace(base.run, max_stall_s=0.2),
                                  sensors=dataclasses.replace(base.sensors, max_sensor_age_s=0.1),
                                  stroke=dataclasses.replace(base.stroke, stop_time_s=0.25),
                                  force=dataclasses.replace(base.force, actuator_time_constant_s=0.05))
-    assert isinstance(config.run, RunConfig)
     assert check_config(config) == [
         "run.max_stall_s (200.0 ms) + sensors.max_sensor_age_s (100.0 ms) = 300.0 ms of blind time exceeds what the "
         "predictive stroke limit covers, stroke.stop_time_s - force.actuator_time_constant_s = 200.0 ms: "
@@ -463,7 +456,7 @@ def test_the_stall_budget_refusal_gives_each_time_in_milliseconds_and_the_remedy
 
 
 def test_the_fade_band_refusal_says_what_would_happen() -> None:
-    config = dataclasses.replace(SafetyConfig(), stroke=StrokeConfig(soft_limit_m=0.07, fade_band_m=0.01, hard_limit_m=0.075))
+    config = dataclasses.replace(SafetyConfig(), stroke=BAND_PAST_HARD_LIMIT)
     assert check_config(config) == [
         "stroke.fade_band_m (0.01 m) is wider than the soft-to-hard gap (0.005 m): force would still push outward at "
         "the hard limit"
@@ -567,8 +560,6 @@ def test_after_priming_the_derivative_is_filtered_from_the_velocity() -> None:
 
 
 def test_a_reset_low_pass_is_primed_by_its_next_input_and_a_reset_tracker_expects_zero() -> None:
-    from harness.safety.detector_base import LowPass
-
     lag = LowPass(0.01)
     lag.update(5.0, 0.001)
     lag.reset()
@@ -606,8 +597,6 @@ def test_pair_checks_start_quietly_at_an_offset_and_before_any_sample() -> None:
 
 
 def test_a_new_low_pass_is_primed_by_its_first_input_and_a_new_tracker_expects_zero() -> None:
-    from harness.safety.detector_base import LowPass
-
     lag = LowPass(0.01)
     assert (lag.y, lag.primed) == (0.0, False)
     assert lag.update(3.0, 0.001) == 3.0
@@ -661,8 +650,6 @@ def test_an_event_ring_of_one_hands_on_a_single_event() -> None:
 
 
 def test_the_list_of_checks_is_put_in_bit_order_and_a_gap_or_a_repeat_is_refused() -> None:
-    from harness.safety.checks import CHECKS_BY_BIT, _in_bit_order
-
     assert _in_bit_order(tuple(reversed(CHECKS_BY_BIT))) == CHECKS_BY_BIT
     gap = tuple(check for check in CHECKS_BY_BIT if check.bit_number != 3)
     n = len(gap)
