@@ -1,4 +1,4 @@
-"""Shared fixtures: paths to the repository, its profiles, and the shared ground-motion records."""
+"""Shared fixtures: paths to the repository, its profiles, and the shared ground-motion records; edited DBCs."""
 
 from __future__ import annotations
 
@@ -9,6 +9,17 @@ import pytest
 REPO = Path(__file__).resolve().parent.parent
 PROFILES = REPO / "profiles"
 SHARED_RECORDS = REPO.parent / "shared" / "data" / "ground_motions"
+
+
+def edited_dbc(folder: Path, source: Path, *replacements: tuple[str, str], name: str = "edited.dbc") -> Path:
+    """A copy of the DBC ``source`` in ``folder`` with each ``(old, new)`` replaced; each ``old`` must occur."""
+    text = source.read_text(encoding="cp1252")
+    for old, new in replacements:
+        assert old in text, f"{old!r} is not in {source.name}"
+        text = text.replace(old, new)
+    path = folder / name
+    path.write_text(text, encoding="cp1252")
+    return path
 
 
 @pytest.fixture(scope="session")

@@ -22,7 +22,7 @@ from harness.canbus.config import CanConfig
 from harness.canbus.link import prepare
 from harness.errors import ProfileError
 from harness.profile import load_profile
-from tests.conftest import PROFILES
+from tests.conftest import PROFILES, edited_dbc
 
 CLASSIC = load_protocol()
 FD = load_protocol(fd=True)
@@ -77,9 +77,7 @@ def test_without_bit_rate_switching_an_fd_frame_costs_more_than_a_classic_one() 
 
 
 def test_a_message_without_brs_runs_its_data_phase_at_the_nominal_rate(tmp_path: Path) -> None:
-    dbc = Path(FD.path).read_text(encoding="cp1252").replace('BA_ "CANFD_BRS" BO_ 50 1;', 'BA_ "CANFD_BRS" BO_ 50 0;')
-    path = tmp_path / "nobrs.dbc"
-    path.write_text(dbc, encoding="cp1252")
+    path = edited_dbc(tmp_path, Path(FD.path), ('BA_ "CANFD_BRS" BO_ 50 1;', 'BA_ "CANFD_BRS" BO_ 50 0;'))
     codec = load_protocol(path, fd=True)["SENSOR_SET"]
     assert frame_time_s(codec, 1_000_000, 5_000_000) == pytest.approx((34 + 358) / 1e6)
 

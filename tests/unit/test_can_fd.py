@@ -18,6 +18,7 @@ from drivers.decoder import Decoder, RxStatus
 from drivers.e2e import protect
 from drivers.errors import ProtocolError
 from drivers.reader import SENSOR_SET_PARTS
+from tests.conftest import edited_dbc
 from tests.unit.test_codec import protected, raw_values
 
 CLASSIC = load_protocol()
@@ -126,28 +127,20 @@ def test_the_packaged_dbc_is_chosen_by_the_frame_format_and_a_mismatch_refused()
 
 
 def test_a_dbc_that_mixes_frame_formats_is_refused(tmp_path: Path) -> None:
-    text = DEFAULT_FD_DBC.read_text(encoding="cp1252").replace('BA_ "VFrameFormat" BO_ 32 14;\n', "")
-    mixed = tmp_path / "mixed.dbc"
-    mixed.write_text(text, encoding="cp1252")
+    mixed = edited_dbc(tmp_path, DEFAULT_FD_DBC, ('BA_ "VFrameFormat" BO_ 32 14;\n', ""))
     with pytest.raises(ProtocolError, match="is a CAN FD frame but ACTUATOR_CMD a classic one"):
         load_protocol(mixed)
 
 
 def test_a_length_no_fd_frame_has_is_refused(tmp_path: Path) -> None:
-    text = DEFAULT_FD_DBC.read_text(encoding="cp1252").replace("BO_ 769 RIG_STATUS: 8 RIG", "BO_ 769 RIG_STATUS: 10 RIG")
-    bad = tmp_path / "odd.dbc"
-    bad.write_text(text, encoding="cp1252")
+    bad = edited_dbc(tmp_path, DEFAULT_FD_DBC, ("BO_ 769 RIG_STATUS: 8 RIG", "BO_ 769 RIG_STATUS: 10 RIG"))
     with pytest.raises(ProtocolError, match="RIG_STATUS: 10 data bytes is not a length a CAN FD frame has"):
         load_protocol(bad)
 
 
 def test_without_the_brs_attribute_the_dbc_default_decides(tmp_path: Path) -> None:
-    text = DEFAULT_FD_DBC.read_text(encoding="cp1252")
-    text = text.replace('BA_ "CANFD_BRS" BO_ 50 1;\n', 'BA_ "CANFD_BRS" BO_ 50 0;\n')
-    text = text.replace('BA_ "CANFD_BRS" BO_ 32 1;\n', "")
-    text = text.replace('BA_DEF_DEF_  "CANFD_BRS" "1";', 'BA_DEF_DEF_  "CANFD_BRS" "0";')
-    path = tmp_path / "nobrs.dbc"
-    path.write_text(text, encoding="cp1252")
+    path = edited_dbc(tmp_path, DEFAULT_FD_DBC, ('BA_ "CANFD_BRS" BO_ 50 1;\n', 'BA_ "CANFD_BRS" BO_ 50 0;\n'),
+                      ('BA_ "CANFD_BRS" BO_ 32 1;\n', ""), ('BA_DEF_DEF_  "CANFD_BRS" "1";', 'BA_DEF_DEF_  "CANFD_BRS" "0";'))
     protocol = load_protocol(path, fd=True)
     assert not protocol["SENSOR_SET"].bitrate_switch  # set to 0
     assert not protocol["ACTUATOR_CMD"].bitrate_switch  # the default, 0

@@ -27,6 +27,7 @@ from drivers.protocol_values import (
     choices_of,
 )
 from harness.safety.lifecycle import State
+from tests.conftest import edited_dbc
 
 PROTOCOL = load_protocol()
 #: Every value table of the DBC and the enum that names it in code.
@@ -74,11 +75,7 @@ def test_the_codec_still_decodes_numbers() -> None:
 
 
 def test_a_dbc_naming_values_otherwise_is_refused(tmp_path: Path) -> None:
-    text = DEFAULT_DBC.read_text(encoding="cp1252")
-    swapped = text.replace('1 "START_TABLE" 2 "STOP_TABLE"', '1 "STOP_TABLE" 2 "START_TABLE"')
-    assert swapped != text
-    dbc = tmp_path / "swapped.dbc"
-    dbc.write_text(swapped, encoding="cp1252")
+    dbc = edited_dbc(tmp_path, DEFAULT_DBC, ('1 "START_TABLE" 2 "STOP_TABLE"', '1 "STOP_TABLE" 2 "START_TABLE"'))
     with pytest.raises(ProtocolError, match=r"VAL_ table of RIG_CONTROL.command .*expected .*1 \"START_TABLE\""):
         load_protocol(dbc)
 
