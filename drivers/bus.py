@@ -234,10 +234,9 @@ class BusHealth:
         """True from an error-passive controller report until an error-active or restarted one (never when bus-off)."""
         return self.state is can.BusState.PASSIVE
 
-    def note_error_frame(self, msg: can.Message, now: float) -> None:
-        """Classify one error frame (``msg.is_error_frame``) by its error-class bits."""
-        cls = msg.arbitration_id
-        data = msg.data
+    def note_error_frame(self, error_class: int, data: bytes | bytearray | memoryview, now: float) -> None:
+        """Classify one error frame by its error-class bits (its arbitration ID) and its data (byte 1: the controller's)."""
+        cls = error_class
         ctrl = data[1] if len(data) > 1 else 0
         self.error_frames += 1
         self.last_error_time = now

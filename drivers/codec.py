@@ -27,9 +27,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import cantools
+import numpy as np
 
 from drivers.e2e import parse_data_ids, profile2_crc, protect
 from drivers.errors import ProtocolError
+from drivers.frame_kernel import signal_plan, unpack_signals
 from drivers.protocol_values import VALUE_TABLES, choices_of
 
 #: The packaged protocol description (classic CAN).
@@ -147,11 +149,10 @@ class MessageCodec:
             )
             for s in self.signals
         )
-        self._unpack_plan = tuple(
-            (i, s.start, s.mask, (1 << (s.length - 1)) if s.signed else 0, 1 << s.length, s.scale, s.offset,
-             s.raw_min, s.raw_max, s.is_float, s.minimum, s.maximum)
-            for i, s in enumerate(self.signals)
-        )
+        #: The signals' plan for the compiled unpacking (:func:`drivers.frame_kernel.signal_plan`).
+        self.plan = signal_plan(self.signals)
+        self._float_bits = np.zeros(1, dtype=np.uint32)
+        self._unpacked = np.zeros(len(self.signals))
 
     def index(self, signal: str) -> int:
         """Position of ``signal`` in this message's value sequences.
@@ -166,7 +167,7 @@ class MessageCodec:
         except KeyError as err:
             raise ProtocolError(f"{self.name} has no signal {signal!r}; expected one of: {', '.join(self.signal_names)}") from err
 
-    def pack(self, data: bytearray, values: Sequence[float]) -> None:
+    def pack(self, data: bytearray | memoryview, values: Sequence[float]) -> None:
         """Pack SI ``values`` into ``data`` in place (crc and counter bits left zero).
 
         Raises
@@ -198,7 +199,7 @@ class MessageCodec:
                     f"{self.name}.{sig.name}: {value!r} {sig.unit} is outside {sig.minimum:g}..{sig.maximum:g} {sig.unit}"
                 )
 
-    def encode_into(self, data: bytearray, values: Sequence[float], counter: int) -> None:
+    def encode_into(self, data: bytearray | memoryview, values: Sequence[float], counter: int) -> None:
         """Pack ``values``, then write ``counter`` and the CRC (a complete, protected frame)."""
         self.pack(data, values)
         protect(data, counter, self.data_ids)
@@ -219,28 +220,20 @@ class MessageCodec:
         self.encode_into(data, values, counter)
         return bytes(data)
 
-    def unpack(self, data: bytes | bytearray, out: list[float]) -> bool:
+    def unpack(self, data: bytes | bytearray | memoryview, out: list[float]) -> bool:
         """Unpack every payload signal of ``data`` into ``out`` (SI); False if one is out of range.
 
-        ``data`` must already have the right length. ``out`` is filled completely
-        even when a value is out of range.
+        ``data`` should have the message's length (missing bytes read as zeros). ``out`` is filled completely
+        even when a value is out of range. The receive side's compiled unpacking
+        (:func:`drivers.frame_kernel.unpack_signals`) does the work.
         """
-        word = int.from_bytes(data, "little")
-        ok = True
-        for i, start, mask, sign_bit, full, scale, offset, raw_min, raw_max, is_float, lo, hi in self._unpack_plan:
-            raw = (word >> start) & mask
-            if raw & sign_bit:
-                raw -= full
-            if is_float:
-                value = _F32.unpack(_U32.pack(raw & 0xFFFFFFFF))[0]
-                if not lo <= value <= hi:
-                    ok = False
-            else:
-                value = raw * scale + offset
-                if not raw_min <= raw <= raw_max:
-                    ok = False
-            out[i] = value
-        return ok
+        payload = np.frombuffer(data, dtype=np.uint8)
+        if len(payload) < self.length:  # the missing bytes read as zeros (the kernel reads only within the length)
+            payload = np.concatenate((payload, np.zeros(self.length - len(payload), dtype=np.uint8)))
+        unpacked = self._unpacked
+        ok = unpack_signals(payload, 0, self.plan, len(unpacked), unpacked, self._float_bits)
+        out[: len(unpacked)] = unpacked.data
+        return bool(ok)
 
     def crc_ok(self, data: bytes | bytearray) -> bool:
         """True when byte 0 holds the profile-2 CRC of the rest (``data`` of the right length)."""

@@ -14,11 +14,11 @@ message's 16-entry Data-ID list by the counter (profile 2). A frame routed to th
 wrong message, or one whose counter nibble was corrupted, therefore fails the CRC
 even if its bytes happen to be self-consistent.
 
-The receiver keeps one :class:`CounterCheck` per message: the first frame after
-a reset is accepted (nothing to compare with), then the counter must advance by
-exactly one (mod 16). A repeated counter is rejected and the state is kept; a
-skipped counter (frames lost or injected) is rejected and the state resynchronises
-to it, so the next consecutive frame is accepted again.
+The receiver keeps the counter of each message (:mod:`drivers.frame_kernel` checks every
+received frame): the first frame after a reset is accepted (nothing to compare with), then
+the counter must advance by exactly one (mod 16). A repeated counter is rejected and the
+state is kept; a skipped counter (frames lost or injected) is rejected and the state
+resynchronises to it, so the next consecutive frame is accepted again.
 """
 
 from __future__ import annotations
@@ -42,6 +42,11 @@ def _make_table(poly: int) -> tuple[int, ...]:
 
 
 _TABLE: tuple[int, ...] = _make_table(CRC8_2F_POLY)
+
+
+def crc_table() -> tuple[int, ...]:
+    """The CRC-8/2F lookup table (256 entries), for the compiled receive side (:mod:`drivers.frame_kernel`)."""
+    return _TABLE
 
 
 def crc8_2f(data: bytes | bytearray | memoryview, start: int = 0, stop: int | None = None) -> int:
@@ -87,7 +92,7 @@ def profile2_crc(data: bytes | bytearray | memoryview, length: int, data_ids: Se
     return crc ^ CRC8_2F_XOROUT
 
 
-def protect(data: bytearray, counter: int, data_ids: Sequence[int]) -> None:
+def protect(data: bytearray | memoryview, counter: int, data_ids: Sequence[int]) -> None:
     """Write ``counter`` into bits 8-11 and the CRC into byte 0 of ``data``, in place.
 
     Parameters
@@ -123,42 +128,3 @@ def parse_data_ids(text: str, message: str) -> tuple[int, ...]:
         raise ValueError(f"{message}: E2EDataIDs value {bad[0]} is outside 0..255")
     return values
 
-
-class CounterCheck:
-    """Receiver-side rolling-counter state of one message.
-
-    Attributes
-    ----------
-    last : int
-        The last accepted (or resynchronised) counter, -1 before the first frame.
-    """
-
-    __slots__ = ("last",)
-
-    OK = 0
-    REPEATED = 1
-    SKIPPED = 2
-
-    def __init__(self) -> None:
-        self.last = -1
-
-    def reset(self) -> None:
-        """Forget the history: the next frame is accepted whatever its counter."""
-        self.last = -1
-
-    def check(self, counter: int) -> int:
-        """Check ``counter`` against the state and update it.
-
-        Returns
-        -------
-        int
-            :attr:`OK`, :attr:`REPEATED` (state kept) or :attr:`SKIPPED` (state resynchronised).
-        """
-        last = self.last
-        if last < 0 or counter == (last + 1) % COUNTER_MODULO:
-            self.last = counter
-            return self.OK
-        if counter == last:
-            return self.REPEATED
-        self.last = counter
-        return self.SKIPPED

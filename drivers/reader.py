@@ -30,16 +30,20 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import can
 
 from drivers.bus import BusHealth
 from drivers.codec import MessageCodec, Protocol
-from drivers.decoder import Decoder, RxStatus
+from drivers.decoder import STATUS_OF, Decoder, RxStatus
 from drivers.errors import BusError, ProtocolError
+from drivers.frame_flags import ERROR, EXTENDED, FD, REMOTE, FrameTap, flags_of
+from drivers.frame_kernel import CAPPED, EMPTY, F_FLAGS, F_ID, F_SIZE, F_STATUS, NOT_DECODED
 from drivers.measurements import Measurements
 from drivers.protocol_values import SENSOR_SET_PARTS, DriveState, EstopSource
+from drivers.seqpacket.bus import SeqPacketBus
+from drivers.seqpacket.wire import HEADER
 
 #: What the harness receives (sensors, actuator status, rig status, E-stop).
 HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
@@ -73,7 +77,8 @@ def damaged_estop(status: RxStatus) -> bool:
 
 
 def estop_frame_active(
-    status: RxStatus, data: bytes | bytearray, accepted: Sequence[float], codec: MessageCodec, scratch: list[float],
+    status: RxStatus, data: bytes | bytearray | memoryview, accepted: Sequence[float], codec: MessageCodec,
+    scratch: list[float],
     active_index: int,
 ) -> bool:
     """Whether a frame on the E-stop ID asks for a stop, judged fail-safe (both readers call this).
@@ -212,15 +217,18 @@ class FrameReader:
             raise ValueError(f"max_frames is {max_frames}; expected at least 1")
         self.bus = bus
         self.protocol = protocol
-        self.decoder = Decoder(protocol, names)
+        self.decoder = Decoder(protocol, names, skip=foreign)
+        self._batch = self.decoder.batch(max_frames)
         self.health = health if health is not None else BusHealth()
         self.counters = ReaderCounters()
         self.use_msg_timestamp = use_msg_timestamp
         self.max_frames = max_frames
         self.estop_requested = False
         #: Called with every received frame (valid or not) before it is decoded, e.g. the
-        #: run recorder's CAN log; must copy what it keeps (python-can may reuse the object).
-        self.tap: Callable[[can.Message], object] | None = None
+        #: run recorder's CAN log (:data:`~drivers.frame_flags.FrameTap`; it must copy the data it keeps).
+        self.tap: FrameTap | None = None
+        #: The bus again when it hands over raw datagrams (``seqpacket``): :meth:`poll` then builds no Message.
+        self._datagrams = bus if isinstance(bus, SeqPacketBus) else None
         self._samples = {
             protocol[n].frame_id: Sample(n, self.decoder.values(n), {s: i for i, s in enumerate(protocol[n].signal_names)})
             for n in names
@@ -337,11 +345,21 @@ class FrameReader:
         BusError
             When the bus itself fails (closed, interface gone).
         """
-        handled = 0
-        recv = self.bus.recv
         if not keep_fresh:
             for sample in self._sample_list:
                 sample.fresh = False
+        datagrams = self._datagrams
+        if datagrams is not None and block_s <= 0.0 and datagrams.raw_receive_ok:
+            handled = self._poll_datagrams(datagrams, now)
+        else:
+            handled = self._poll_messages(now, block_s)
+        self.counters.frames += handled
+        return handled
+
+    def _poll_messages(self, now: float, block_s: float) -> int:
+        """:meth:`poll` through python-can's ``recv``: a :class:`can.Message` per frame (any bus)."""
+        handled = 0
+        recv = self.bus.recv
         timeout = block_s
         while handled < self.max_frames:
             try:
@@ -352,13 +370,74 @@ class FrameReader:
                 break
             timeout = 0.0
             handled += 1
+            flags = flags_of(msg)
+            data = msg.data if msg.data is not None else b""
             if self.tap is not None:
-                self.tap(msg)
-            self._handle(msg, self._message_time(msg.timestamp, now) if self.use_msg_timestamp else now)
+                self.tap(msg.timestamp, msg.arbitration_id, flags, data, msg.channel)
+            t = self._message_time(msg.timestamp, now) if self.use_msg_timestamp else now
+            self._handle(msg.arbitration_id, flags, data, t)
         else:
             self.counters.polls_capped += 1
-        self.counters.frames += handled
         return handled
+
+    def _poll_datagrams(self, bus: SeqPacketBus, now: float) -> int:
+        """:meth:`poll` straight from a ``seqpacket`` bus's datagrams, with no :class:`can.Message` (the tick's path).
+
+        The same frames in the same order as :meth:`_poll_messages` (the bus has no filters and no
+        local echo, :attr:`~drivers.seqpacket.bus.SeqPacketBus.raw_receive_ok`), stamped with the
+        wall clock as the bus stamps a Message. They are taken off the bus first, checked and decoded
+        in one compiled call (:meth:`~drivers.decoder.Decoder.decode_datagrams`), then accounted
+        one by one, in order, as :meth:`_handle` accounts a frame.
+        """
+        batch = self._batch
+        fd = bus.direct_fd
+        if fd < 0:
+            frames = self._receive_each(bus, 0)
+        else:
+            frames, end, malformed = self.decoder.receive_datagrams(fd, batch, self.max_frames)
+            bus.note_direct_receive(malformed)
+            if end == CAPPED:
+                self.counters.polls_capped += 1
+            elif end != EMPTY:  # end of file or a failed recv: the bus's own path judges it (drops the peer, raises)
+                frames = self._receive_each(bus, frames)
+        if not frames:
+            return 0
+        stamp = time.time()
+        t = self._message_time(stamp, now) if self.use_msg_timestamp else now
+        tap, channel, rows, ints = self.tap, bus.channel, batch.rows, batch.frame_ints
+        for k in range(frames):
+            frame_id, flags, status = ints[k, F_ID], ints[k, F_FLAGS], ints[k, F_STATUS]
+            data = rows[k][HEADER.size : ints[k, F_SIZE]]
+            if tap is not None:
+                tap(stamp, frame_id, flags, data, channel)
+            if status == NOT_DECODED:
+                self._handle_undecoded(frame_id, flags, data, t)
+                continue
+            if status == RxStatus.OK:
+                self.decoder.take(batch, k)
+            self._account(frame_id, flags & EXTENDED, STATUS_OF[status], data, t)
+        return frames
+
+    def _receive_each(self, bus: SeqPacketBus, start: int) -> int:
+        """Fill ``self._batch`` from row ``start`` on through the bus's :meth:`~drivers.seqpacket.bus.SeqPacketBus.recv_datagram`
+        (a hub relaying between peers, or after the compiled receive ended unusually), then decode those rows."""
+        batch = self._batch
+        rows, ints = batch.rows, batch.frame_ints
+        recv = bus.recv_datagram
+        frames = start
+        while frames < self.max_frames:
+            try:
+                size = recv(rows[frames])
+            except (can.CanError, OSError, ValueError) as err:
+                raise BusError(f"receiving from the CAN bus failed: {err}") from err
+            if not size:
+                break
+            ints[frames, F_SIZE] = size
+            frames += 1
+        else:
+            self.counters.polls_capped += 1
+        self.decoder.decode_datagrams(batch, start, frames)
+        return frames
 
     @staticmethod
     def _message_time(timestamp: float, now: float) -> float:
@@ -374,22 +453,30 @@ class FrameReader:
             return math.nan
         return now - max(delay, 0.0)
 
-    def _handle(self, msg: can.Message, t: float) -> None:
-        if msg.is_error_frame:
-            self.health.note_error_frame(msg, t)
+    def _handle(self, frame_id: int, flags: int, data: bytes | bytearray | memoryview, t: float) -> None:
+        """Check, decode and account one received frame (``flags`` of :mod:`drivers.frame_flags`) seen at ``t``."""
+        if flags & ERROR or (frame_id in self._foreign_ids and not flags & EXTENDED):
+            self._handle_undecoded(frame_id, flags, data, t)
             return
-        frame_id = msg.arbitration_id
-        if frame_id in self._foreign_ids and not msg.is_extended_id:
-            # Every such frame is someone else's: the bus does not echo our own frames
-            # (receive_own_messages=False). msg.is_rx cannot tell: socketcan marks frames
-            # from any process on this host is_rx=False (MSG_DONTROUTE), not only ours.
-            self.counters.foreign_commands += 1
-            self.counters.last_foreign_time = t
-            return
-        extended = msg.is_extended_id
+        extended = flags & EXTENDED
         status = self.decoder.decode(
-            frame_id, msg.data, is_data_frame=not msg.is_remote_frame, extended=extended, fd=msg.is_fd
+            frame_id, data, is_data_frame=not flags & REMOTE, extended=bool(extended), fd=bool(flags & FD)
         )
+        self._account(frame_id, extended, status, data, t)
+
+    def _handle_undecoded(self, frame_id: int, flags: int, data: bytes | bytearray | memoryview, t: float) -> None:
+        """An error frame, or a frame on a foreign identifier: accounted, never decoded."""
+        if flags & ERROR:
+            self.health.note_error_frame(frame_id, data, t)
+            return
+        # Every frame on a foreign ID is someone else's: the bus does not echo our own frames
+        # (receive_own_messages=False). msg.is_rx cannot tell: socketcan marks frames
+        # from any process on this host is_rx=False (MSG_DONTROUTE), not only ours.
+        self.counters.foreign_commands += 1
+        self.counters.last_foreign_time = t
+
+    def _account(self, frame_id: int, extended: int, status: RxStatus, data: bytes | bytearray | memoryview, t: float) -> None:
+        """What a decoded frame means for its sample (fresh, poisoned), SENSOR_SET's parts and the E-stop."""
         sample = None if extended else self._samples.get(frame_id)
         if sample is not None:
             sample.last_status = status
@@ -402,7 +489,7 @@ class FrameReader:
         if frame_id == self._set_id and not extended:
             self._spread(status, t)
         elif frame_id == self._estop_id and not extended:
-            self._note_estop(status, msg.data, t)
+            self._note_estop(status, data, t)
 
     @staticmethod
     def _poison(sample: Sample, t: float) -> None:
@@ -417,7 +504,7 @@ class FrameReader:
         sample.rx_time = t
         sample.fresh = True
 
-    def _note_estop(self, status: RxStatus, data: bytearray, t: float) -> None:
+    def _note_estop(self, status: RxStatus, data: bytes | bytearray | memoryview, t: float) -> None:
         self.counters.estop_frames += 1
         self.counters.last_estop_time = t
         values = self._samples[self._estop_id].values

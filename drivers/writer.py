@@ -2,7 +2,10 @@
 
 Each message a node sends has one :class:`TxFrame`: a ``can.Message`` built at
 configure time whose ``data`` bytearray is overwritten in place on every send, and
-the message's rolling counter. The counter advances only when ``bus.send``
+the message's rolling counter. On a ``seqpacket`` bus the frame is encoded instead into
+its preallocated datagram (:mod:`drivers.seqpacket.wire`, header written once) and handed
+to :meth:`~drivers.seqpacket.bus.SeqPacketBus.send_datagram`: the same bytes on the wire
+without python-can's per-message path. The counter advances only when ``bus.send``
 succeeded, so a frame the bus refused leaves no gap for the receiver to count.
 
 ``send`` never blocks (``timeout=0``) and never raises on a bus failure: a full
@@ -13,7 +16,7 @@ return value, so the tick decides what to do (the supervisor trips on it).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import can
 
@@ -21,7 +24,10 @@ from drivers.bus import BusHealth
 from drivers.codec import MessageCodec, Protocol
 from drivers.e2e import COUNTER_MODULO
 from drivers.errors import ProtocolError
+from drivers.frame_flags import FrameTap, flags_of
 from drivers.protocol_values import EstopSource
+from drivers.seqpacket.bus import SeqPacketBus
+from drivers.seqpacket.wire import HEADER
 
 #: What the harness sends.
 HARNESS_TX = ("ACTUATOR_CMD", "HEARTBEAT", "ESTOP", "RIG_CONTROL", "DRIVE_RESET")
@@ -45,9 +51,15 @@ class TxFrame:
         The counter the next frame will carry (0..15).
     sent : int
         Frames sent successfully.
+    flags : int
+        Its kind (:mod:`drivers.frame_flags`).
+    datagram : bytearray
+        The frame in the ``seqpacket`` wire format (header written here, data rewritten in place).
+    payload : memoryview
+        The data field of :attr:`datagram`.
     """
 
-    __slots__ = ("codec", "msg", "counter", "sent")
+    __slots__ = ("codec", "msg", "counter", "sent", "flags", "datagram", "payload")
 
     def __init__(self, codec: MessageCodec):
         self.codec = codec
@@ -57,6 +69,10 @@ class TxFrame:
         )
         self.counter = 0
         self.sent = 0
+        self.flags = flags_of(self.msg)
+        self.datagram = bytearray(HEADER.size + codec.length)
+        HEADER.pack_into(self.datagram, 0, codec.frame_id, self.flags, codec.length)
+        self.payload = memoryview(self.datagram)[HEADER.size :]
 
 
 class FrameWriter:
@@ -87,9 +103,12 @@ class FrameWriter:
         channel = getattr(bus, "channel_id", getattr(bus, "channel", None))  # virtual: channel_id
         for tx in self._frames.values():  # logs name the channel the frame went out on
             tx.msg.channel = channel if isinstance(channel, (str, int)) else None
-        #: Called with every frame the bus took, e.g. the run recorder's CAN log;
-        #: must copy what it keeps (the frame object is reused for the next send).
-        self.tap: Callable[[can.Message], object] | None = None
+        self._channel = channel if isinstance(channel, (str, int)) else None
+        #: Called with every frame the bus took, e.g. the run recorder's CAN log
+        #: (:data:`~drivers.frame_flags.FrameTap`; the data is rewritten by the next send: copy it).
+        self.tap: FrameTap | None = None
+        #: The bus again when it takes datagrams (``seqpacket``): frames are then sent without a Message.
+        self._datagrams = bus if isinstance(bus, SeqPacketBus) else None
 
     def frame(self, name: str) -> TxFrame:
         """The :class:`TxFrame` of message ``name``."""
@@ -120,18 +139,22 @@ class FrameWriter:
 
     def send_frame(self, tx: TxFrame, values: Sequence[float], now: float) -> bool:
         """As :meth:`send`, for a :class:`TxFrame` looked up once beforehand."""
-        msg = tx.msg
-        tx.codec.encode_into(msg.data, values, tx.counter)
-        msg.timestamp = now
+        datagrams = self._datagrams
+        data: bytearray | memoryview = tx.payload if datagrams is not None else tx.msg.data
+        tx.codec.encode_into(data, values, tx.counter)  # a ProtocolError here is the caller's bug: it propagates
         try:
-            self.bus.send(msg, timeout=0)
+            if datagrams is not None:
+                datagrams.send_datagram(tx.datagram)
+            else:
+                tx.msg.timestamp = now
+                self.bus.send(tx.msg, timeout=0)
         except (can.CanError, OSError, ValueError) as err:  # ValueError: select() on a closed socket
             self.health.note_send_failure(err, now)
             return False
         tx.counter = (tx.counter + 1) % COUNTER_MODULO
         tx.sent += 1
         if self.tap is not None:
-            self.tap(msg)
+            self.tap(now, tx.codec.frame_id, tx.flags, data, self._channel)
         return True
 
 

@@ -72,7 +72,7 @@ from can import BusABC, CanOperationError, CanProtocol, Message
 
 from drivers.errors import BusError
 from drivers.seqpacket.channel import ABSTRACT_PREFIX, parse_channel
-from drivers.seqpacket.wire import MAX_DATAGRAM_BYTES, decode_frame, encode_frame
+from drivers.seqpacket.wire import HEADER, MAX_DATAGRAM_BYTES, decode_frame, encode_frame
 
 LOG = logging.getLogger(__name__)
 
@@ -233,9 +233,23 @@ class SeqPacketBus(BusABC):
         ValueError
             The frame does not fit (over 64 data bytes, ID or DLC out of range).
         """
+        self.send_datagram(encode_frame(msg))
+        if self.receive_own_messages:
+            self._own.append(self._echo(msg))
+
+    def send_datagram(self, frame: bytes | bytearray | memoryview) -> None:
+        """Send one frame already in the wire format (:mod:`.wire`) to every other node; never blocks.
+
+        The writer's path without a :class:`can.Message` (:class:`drivers.writer.FrameWriter` keeps each
+        frame's datagram and rewrites its data in place). Never echoed locally.
+
+        Raises
+        ------
+        can.CanOperationError
+            As :meth:`send`.
+        """
         if self._closed:
             raise CanOperationError(f"cannot send on {self.channel_info}: the bus is shut down")
-        frame = encode_frame(msg)
         if self._listener is not None:
             if self._listen_ep.poll(0):  # ~0.4 us; a node whose connect returned hears this frame
                 self._accept_pending()
@@ -253,10 +267,8 @@ class SeqPacketBus(BusABC):
                 f"(socket buffer {self.socket_buffer_bytes} bytes, ~{self.socket_buffer_bytes // BYTES_PER_QUEUED_FRAME} frames)",
                 error_code=errno.ENOBUFS,
             )
-        if self.receive_own_messages:
-            self._own.append(self._echo(msg))
 
-    def _send_to(self, peers: tuple[socket.socket, ...], frame: bytes) -> tuple[int, int]:
+    def _send_to(self, peers: tuple[socket.socket, ...], frame: bytes | bytearray | memoryview) -> tuple[int, int]:
         """Send ``frame`` to each of ``peers``; (peers whose buffer was full, peers dropped as gone)."""
         full = dropped = 0
         for sock in peers:
@@ -302,43 +314,97 @@ class SeqPacketBus(BusABC):
             raise CanOperationError(f"cannot receive on {self.channel_info}: the bus is shut down")
         if self._own:
             return self._own.popleft()
+        size = self.recv_datagram()
+        return decode_frame(self._buf, size, self.channel) if size else None
+
+    @property
+    def raw_receive_ok(self) -> bool:
+        """:meth:`recv_datagram` hands over every frame :meth:`recv` would: no filters, no local echo."""
+        return not self.receive_own_messages and not self.filters
+
+    @property
+    def direct_fd(self) -> int:
+        """The one connected socket's descriptor when its datagrams can be read straight off it, else -1.
+
+        That is when this node has exactly one connection (nothing to relay, no round robin) and
+        :attr:`raw_receive_ok`: the reader then takes them with its compiled receive
+        (:meth:`drivers.decoder.Decoder.receive_datagrams`) and calls :meth:`note_direct_receive` after.
+        """
+        peers = self._peers
+        if len(peers) != 1 or self._closed or not self.raw_receive_ok:
+            return -1
+        return peers[0].fileno()
+
+    def note_direct_receive(self, malformed: int) -> None:
+        """After the reader drained :attr:`direct_fd` itself: count ``malformed`` datagrams, and on the hub
+        look for new peers as :meth:`recv_datagram` does when nothing waits."""
+        self.malformed_frames += malformed
+        if self._listener is not None:
+            now = time.monotonic()
+            if now >= self._next_accept_check:  # at most every ACCEPT_CHECK_INTERVAL_S (send checks every time)
+                self._next_accept_check = now + ACCEPT_CHECK_INTERVAL_S
+                if self._listen_ep.poll(0):
+                    self._accept_pending()
+
+    def recv_datagram(self, into: memoryview | bytearray | None = None) -> int:
+        """Take the next waiting frame's datagram into ``into``; its size in bytes, 0 when none waits.
+
+        Never blocks and builds no :class:`can.Message`: the reader's path
+        (:meth:`drivers.reader.FrameReader.poll`) when :attr:`raw_receive_ok`. The datagram is
+        :data:`.wire.HEADER` then the data, checked for size (a malformed one is counted in
+        :attr:`malformed_frames` and skipped); the hub relays it as :meth:`recv` does. Filters
+        and local echoes are not applied here.
+
+        Parameters
+        ----------
+        into : writable bytes-like, optional
+            At least :data:`.wire.MAX_DATAGRAM_BYTES` + 1 bytes; default the bus's own buffer.
+
+        Raises
+        ------
+        can.CanOperationError
+            The bus is shut down.
+        """
+        if self._closed:
+            raise CanOperationError(f"cannot receive on {self.channel_info}: the bus is shut down")
+        buffer = self._buf if into is None else into
         peers = self._peers
         count = len(peers)
         start = self._rr if count > 1 else 0
         for k in range(count):
             index = (start + k) % count
             sock = peers[index]
-            try:
-                size = sock.recv_into(self._buf, MAX_DATAGRAM_BYTES + 1, _RECV_FLAGS)
-            except BlockingIOError:
-                continue
-            except OSError as err:
-                self._drop_or_raise(sock, err, "receiving")
-                continue
-            if size == 0:  # end of file: the other side closed
-                self._drop_peer(sock)
-                continue
-            self._rr = index + 1
-            msg = decode_frame(self._buf, size, self.channel)
-            if msg is None:
-                self.malformed_frames += 1
-                continue
-            if count > 1 and self._listener is not None:
-                self._relay(sock, size)
-            return msg
+            while True:  # past malformed datagrams: the frame behind one is read in the same poll
+                try:
+                    size = sock.recv_into(buffer, MAX_DATAGRAM_BYTES + 1, _RECV_FLAGS)
+                except BlockingIOError:
+                    break
+                except OSError as err:
+                    self._drop_or_raise(sock, err, "receiving")
+                    break
+                if size == 0:  # end of file: the other side closed
+                    self._drop_peer(sock)
+                    break
+                if not HEADER.size <= size <= MAX_DATAGRAM_BYTES:
+                    self.malformed_frames += 1
+                    continue
+                self._rr = index + 1
+                if count > 1 and self._listener is not None:
+                    self._relay(sock, buffer, size)
+                return size
         if self._listener is not None:
             now = time.monotonic()
             if now >= self._next_accept_check:  # at most every ACCEPT_CHECK_INTERVAL_S (send checks every time)
                 self._next_accept_check = now + ACCEPT_CHECK_INTERVAL_S
                 if self._listen_ep.poll(0) and self._accept_pending():
-                    return self._recv_nowait()
+                    return self.recv_datagram(into)
         elif not peers:
             self._maybe_rejoin()
-        return None
+        return 0
 
-    def _relay(self, source: socket.socket, size: int) -> None:
-        """Forward the datagram in the receive buffer to every peer but its source (hub only)."""
-        frame = bytes(memoryview(self._buf)[:size])
+    def _relay(self, source: socket.socket, buffer: memoryview | bytearray, size: int) -> None:
+        """Forward the datagram in ``buffer[:size]`` to every peer but its source (hub only)."""
+        frame = bytes(memoryview(buffer)[:size])
         for sock in self._peers:
             if sock is source:
                 continue

@@ -1,7 +1,7 @@
 """The ``seqpacket`` interface's wire format: one datagram per CAN frame.
 
-:data:`HEADER` (``<IBB``: arbitration ID, flags, DLC) followed by the data (at most 64
-bytes), one datagram per frame. The receiver stamps ``timestamp = time.time()`` on arrival
+:data:`HEADER` (``<IBB``: arbitration ID, flags of :mod:`drivers.frame_flags`, DLC) followed by
+the data (at most 64 bytes), one datagram per frame. The receiver stamps ``timestamp = time.time()`` on arrival
 (the same wall clock as the sender's, so the two compare).
 """
 
@@ -12,19 +12,14 @@ import time
 
 from can import Message
 
-#: Frame header: arbitration ID, flags (``FLAG_*``), DLC; the data follows.
+from drivers.frame_flags import BRS, ERROR, ESI, EXTENDED, FD, REMOTE, flags_of
+
+#: Frame header: arbitration ID, flags (:mod:`drivers.frame_flags`, never ``RX``), DLC; the data follows.
 HEADER = struct.Struct("<IBB")
 #: Largest data field (bytes; CAN FD).
 MAX_DATA_BYTES = 64
 #: Largest valid datagram (bytes).
 MAX_DATAGRAM_BYTES = HEADER.size + MAX_DATA_BYTES
-
-FLAG_EXTENDED = 0x01
-FLAG_REMOTE = 0x02
-FLAG_ERROR = 0x04
-FLAG_FD = 0x08
-FLAG_BRS = 0x10
-FLAG_ESI = 0x20
 
 
 def encode_frame(msg: Message) -> bytes:
@@ -35,19 +30,9 @@ def encode_frame(msg: Message) -> bytes:
     ValueError
         More than 64 data bytes, or an ID or DLC that does not fit the header.
     """
-    flags = 0
-    if msg.is_extended_id:
-        flags |= FLAG_EXTENDED
-    if msg.is_remote_frame:
-        flags |= FLAG_REMOTE
-    if msg.is_error_frame:
-        flags |= FLAG_ERROR
-    if msg.is_fd:
-        flags |= FLAG_FD
-        if msg.bitrate_switch:
-            flags |= FLAG_BRS
-        if msg.error_state_indicator:
-            flags |= FLAG_ESI
+    flags = flags_of(msg)
+    if not flags & FD:
+        flags &= ~(BRS | ESI)  # only an FD frame has them
     data = msg.data
     if len(data) > MAX_DATA_BYTES:
         raise ValueError(f"frame 0x{msg.arbitration_id:x} has {len(data)} data bytes; at most {MAX_DATA_BYTES}")
@@ -79,14 +64,14 @@ def decode_frame(buf: bytearray, size: int, channel: str) -> Message | None:
     msg = _new_message()
     msg.timestamp = time.time()
     msg.arbitration_id = arbitration_id
-    msg.is_extended_id = bool(flags & FLAG_EXTENDED)
-    msg.is_remote_frame = bool(flags & FLAG_REMOTE)
-    msg.is_error_frame = bool(flags & FLAG_ERROR)
-    msg.is_fd = bool(flags & FLAG_FD)
-    msg.bitrate_switch = bool(flags & FLAG_BRS)
-    msg.error_state_indicator = bool(flags & FLAG_ESI)
+    msg.is_extended_id = bool(flags & EXTENDED)
+    msg.is_remote_frame = bool(flags & REMOTE)
+    msg.is_error_frame = bool(flags & ERROR)
+    msg.is_fd = bool(flags & FD)
+    msg.bitrate_switch = bool(flags & BRS)
+    msg.error_state_indicator = bool(flags & ESI)
     msg.dlc = dlc
-    msg.data = bytearray() if flags & FLAG_REMOTE else buf[HEADER.size:size]
+    msg.data = bytearray() if flags & REMOTE else buf[HEADER.size:size]
     msg.channel = channel
     msg.is_rx = True
     return msg

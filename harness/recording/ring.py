@@ -21,17 +21,9 @@ from typing import Any
 import can
 import numpy as np
 
+from drivers.frame_flags import RX, flags_of, message_of
 from harness.errors import HarnessError
 from harness.realtime.memory import float_view, prefaulted_zeros
-
-#: Bit layout of :attr:`FrameRing.flags`.
-FLAG_EXTENDED = 1
-FLAG_RX = 2
-FLAG_ERROR = 4
-FLAG_REMOTE = 8
-FLAG_FD = 16
-FLAG_BRS = 32
-FLAG_ESI = 64
 
 MAX_DATA = 64
 
@@ -174,40 +166,57 @@ class FrameRing:
         timestamp : float, optional
             Its time as the recorder should log it (s; default ``msg.timestamp``).
         """
+        flags = flags_of(msg) | (RX if (msg.is_rx if rx is None else rx) else 0)
+        data = msg.data if msg.data is not None else b""
+        return self.push_fields(msg.timestamp if timestamp is None else timestamp, msg.arbitration_id, flags, data, msg.channel)
+
+    def push_fields(
+        self, timestamp: float, frame_id: int, flags: int, data: bytes | bytearray | memoryview, channel: Any = None
+    ) -> bool:
+        """Copy one frame in from its fields; never blocks. False if full (dropped and counted).
+
+        Parameters
+        ----------
+        timestamp : float
+            Its time as the recorder should log it (s, wall clock).
+        frame_id : int
+            Arbitration ID.
+        flags : int
+            Its kind and direction (:mod:`drivers.frame_flags`, :data:`~drivers.frame_flags.RX` for received).
+        data : bytes-like
+            The data field (at most 64 bytes); copied.
+        channel : optional
+            The channel it was seen on (logs name it).
+        """
         write = self._write
         if write - self._read >= self._capacity:
             self.dropped += 1
             return False
-        slot = write % self._capacity
-        data = msg.data
-        size = len(data) if data is not None else 0
+        size = len(data)
         if size > MAX_DATA:
             raise RecordingError(f"found a CAN frame with {size} data bytes, expected at most {MAX_DATA}")
-        if msg.is_extended_id or msg.is_error_frame or msg.is_remote_frame or msg.is_fd:
-            flags = _flags_of(msg) & ~FLAG_RX
-        else:
-            flags = 0  # a classic data frame with an 11-bit ID: the frames of this protocol
-        if msg.is_rx if rx is None else rx:
-            flags |= FLAG_RX
-        self._timestamp_mv[slot] = msg.timestamp if timestamp is None else timestamp
-        self._id_mv[slot] = msg.arbitration_id
+        slot = write % self._capacity
+        self._timestamp_mv[slot] = timestamp
+        self._id_mv[slot] = frame_id
         self._dlc_mv[slot] = size
         self._flags_mv[slot] = flags
-        channel = self._channels.get(msg.channel)
-        self._channel_mv[slot] = channel if channel is not None else self._channel_index(msg.channel)
+        index = self._channels.get(channel)
+        self._channel_mv[slot] = index if index is not None else self._channel_index(channel)
         if size:
             offset = slot * MAX_DATA
             self._data_view[offset : offset + size] = data
         self._write = write + 1
         return True
 
-    def received(self, msg: can.Message) -> bool:
-        """:meth:`push` a frame this node received, whatever the bus marked it (a reader's tap)."""
-        return self.push(msg, True)
+    def received(self, timestamp: float, frame_id: int, flags: int, data: bytes | bytearray | memoryview,
+                 channel: Any = None) -> bool:
+        """:meth:`push_fields` a frame this node received, whatever the bus marked it (a reader's tap)."""
+        return self.push_fields(timestamp, frame_id, flags | RX, data, channel)
 
-    def sent(self, msg: can.Message) -> bool:
-        """:meth:`push` a frame this node sent, stamped with the wall clock now (a writer's tap)."""
-        return self.push(msg, False, time.time())
+    def sent(self, timestamp: float, frame_id: int, flags: int, data: bytes | bytearray | memoryview,
+             channel: Any = None) -> bool:
+        """:meth:`push_fields` a frame this node sent, stamped with the wall clock now (a writer's tap)."""
+        return self.push_fields(time.time(), frame_id, flags & ~RX, data, channel)
 
     def _channel_index(self, channel: Any) -> int:
         index = self._channels.get(channel)
@@ -228,33 +237,9 @@ class FrameRing:
         return messages
 
     def _message(self, slot: int) -> can.Message:
-        flags = int(self._flags[slot])
         size = int(self._dlc[slot])
         offset = slot * MAX_DATA
-        return can.Message(
-            timestamp=float(self._timestamp[slot]),
-            arbitration_id=int(self._arbitration_id[slot]),
-            is_extended_id=bool(flags & FLAG_EXTENDED),
-            is_rx=bool(flags & FLAG_RX),
-            is_error_frame=bool(flags & FLAG_ERROR),
-            is_remote_frame=bool(flags & FLAG_REMOTE),
-            is_fd=bool(flags & FLAG_FD),
-            bitrate_switch=bool(flags & FLAG_BRS),
-            error_state_indicator=bool(flags & FLAG_ESI),
-            dlc=size,
-            data=bytes(self._data[offset : offset + size]),
-            channel=self._channel_names[int(self._channel[slot])],
-            check=False,
+        return message_of(
+            float(self._timestamp[slot]), int(self._arbitration_id[slot]), int(self._flags[slot]),
+            self._data[offset : offset + size], self._channel_names[int(self._channel[slot])],
         )
-
-
-def _flags_of(msg: can.Message) -> int:
-    return (
-        (FLAG_EXTENDED if msg.is_extended_id else 0)
-        | (FLAG_RX if msg.is_rx else 0)
-        | (FLAG_ERROR if msg.is_error_frame else 0)
-        | (FLAG_REMOTE if msg.is_remote_frame else 0)
-        | (FLAG_FD if msg.is_fd else 0)
-        | (FLAG_BRS if msg.bitrate_switch else 0)
-        | (FLAG_ESI if msg.error_state_indicator else 0)
-    )

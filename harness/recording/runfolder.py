@@ -21,7 +21,7 @@ record); the command reports the loss (docs/SAFETY.md, "recorder").
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -29,6 +29,7 @@ from typing import Any
 import can
 import numpy as np
 
+from drivers.frame_flags import FrameTap
 from harness.recording.layout import (
     CAN_FILE,
     EVENTS_FILE,
@@ -240,13 +241,13 @@ class RunFolder:
         """Queue a sent or received CAN frame; never blocks; False if dropped."""
         return self._writer.record_frame(msg)
 
-    def frame_taps(self) -> tuple[Callable[[can.Message], bool], Callable[[can.Message], bool]]:
+    def frame_taps(self) -> tuple[FrameTap, FrameTap]:
         """The taps a link's reader and writer call with every frame: ``(received, sent)``.
 
         Each queues the frame straight into the recorder's ring with its direction (SocketCAN
         marks frames from other processes of the same host ``is_rx=False``, so the side that
         saw the frame decides) and, for sent frames, the wall-clock time (the writer stamps
-        them with loop time); received frames keep the bus's timestamp.
+        them with loop time); received frames keep the time the reader gives (the bus's timestamp).
         """
         frames = self._writer.frames
         return frames.received, frames.sent

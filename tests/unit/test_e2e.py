@@ -8,7 +8,7 @@ from cantools.autosar.end_to_end import compute_profile2_crc
 from hypothesis import given
 from hypothesis import strategies as st
 
-from drivers.e2e import CounterCheck, crc8_2f, parse_data_ids, profile2_crc, protect
+from drivers.e2e import crc8_2f, parse_data_ids, profile2_crc, protect
 
 DATA_IDS = tuple(range(0x40, 0x50))
 
@@ -54,36 +54,6 @@ def test_data_id_changes_crc() -> None:
     assert profile2_crc(data, 4, other) != data[0]
 
 
-def test_counter_first_frame_accepted_then_consecutive() -> None:
-    check = CounterCheck()
-    assert check.check(9) == CounterCheck.OK
-    assert [check.check(c) for c in (10, 11, 12, 13, 14, 15, 0, 1)] == [CounterCheck.OK] * 8
-    assert check.last == 1
-
-
-def test_counter_repeated_rejected_and_state_kept() -> None:
-    check = CounterCheck()
-    check.check(3)
-    assert check.check(3) == CounterCheck.REPEATED
-    assert check.check(4) == CounterCheck.OK
-
-
-def test_counter_skipped_rejected_then_resynchronised() -> None:
-    check = CounterCheck()
-    check.check(3)
-    assert check.check(5) == CounterCheck.SKIPPED
-    assert check.check(6) == CounterCheck.OK
-    assert check.check(15) == CounterCheck.SKIPPED  # far jump
-    assert check.check(0) == CounterCheck.OK  # wraps
-
-
-def test_counter_reset_accepts_anything() -> None:
-    check = CounterCheck()
-    check.check(3)
-    check.reset()
-    assert check.check(12) == CounterCheck.OK
-
-
 def test_parse_data_ids() -> None:
     assert parse_data_ids("1, 2 3 4 5 6 7 8 9 10 11 12 13 14 15 0x10", "M") == tuple(range(1, 17))
     with pytest.raises(ValueError, match="15 values instead of 16"):
@@ -92,18 +62,6 @@ def test_parse_data_ids() -> None:
         parse_data_ids(" ".join(["256"] * 16), "M")
     with pytest.raises(ValueError, match="not a list of integers"):
         parse_data_ids("a " * 16, "M")
-
-
-def test_counter_zero_is_a_counter_like_any_other() -> None:
-    # only "no frame yet" (-1) accepts any counter; after a 0 the next must be 1
-    check = CounterCheck()
-    assert check.check(0) == CounterCheck.OK
-    assert check.check(5) == CounterCheck.SKIPPED
-    check.reset()
-    assert [check.check(c) for c in (15, 0)] == [CounterCheck.OK, CounterCheck.OK]  # wraps to 0
-    assert check.check(0) == CounterCheck.REPEATED
-    assert check.check(3) == CounterCheck.SKIPPED
-    assert check.last == 3
 
 
 def test_parse_data_ids_accepts_0_and_255_and_refuses_just_outside() -> None:

@@ -40,12 +40,12 @@ class Wire:
     def __init__(self) -> None:
         self.frames: list[tuple[int, list[float]]] = []
 
-    def __call__(self, msg) -> None:
-        codec = PROTOCOL.by_id.get(msg.arbitration_id)
+    def __call__(self, timestamp: float, frame_id: int, flags: int, data, channel: object) -> None:
+        codec = PROTOCOL.by_id.get(frame_id)
         values = [0.0] * len(codec.signals) if codec is not None else []
         if codec is not None:
-            codec.unpack(bytearray(msg.data), values)
-        self.frames.append((msg.arbitration_id, values))
+            codec.unpack(bytearray(data), values)
+        self.frames.append((frame_id, values))
 
     def clear(self) -> None:
         self.frames.clear()
