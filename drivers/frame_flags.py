@@ -32,8 +32,8 @@ BRS = 0x10
 ESI = 0x20
 RX = 0x40
 #: A reader's or writer's tap, called with every frame it received or sent, e.g. the recorder's CAN log:
-#: ``tap(timestamp, frame_id, flags, data, channel)`` (timestamp in s, wall clock; ``data`` is only valid
-#: during the call: copy what you keep).
+#: ``tap(timestamp, frame_id, flags, data, channel)``: the time in s (wall clock), the flags with :data:`RX`
+#: set for a received frame, ``data`` valid only during the call (copy what you keep).
 FrameTap = Callable[[float, int, int, "bytes | bytearray | memoryview", object], object]
 #: Frames the protocol's decoder never reads: a 29-bit identifier, a remote or an error frame.
 NOT_PROTOCOL_DATA = EXTENDED | REMOTE | ERROR

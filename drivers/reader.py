@@ -38,7 +38,7 @@ from drivers.bus import BusHealth
 from drivers.codec import MessageCodec, Protocol
 from drivers.decoder import STATUS_OF, Decoder, RxStatus
 from drivers.errors import BusError, ProtocolError
-from drivers.frame_flags import ERROR, EXTENDED, FD, REMOTE, FrameTap, flags_of
+from drivers.frame_flags import ERROR, EXTENDED, FD, REMOTE, RX, FrameTap, flags_of
 from drivers.frame_kernel import CAPPED, EMPTY, F_FLAGS, F_ID, F_SIZE, F_STATUS, NOT_DECODED
 from drivers.measurements import Measurements
 from drivers.protocol_values import SENSOR_SET_PARTS, DriveState, EstopSource
@@ -373,7 +373,7 @@ class FrameReader:
             flags = flags_of(msg)
             data = msg.data if msg.data is not None else b""
             if self.tap is not None:
-                self.tap(msg.timestamp, msg.arbitration_id, flags, data, msg.channel)
+                self.tap(msg.timestamp, msg.arbitration_id, flags | RX, data, msg.channel)
             t = self._message_time(msg.timestamp, now) if self.use_msg_timestamp else now
             self._handle(msg.arbitration_id, flags, data, t)
         else:
@@ -409,7 +409,7 @@ class FrameReader:
             frame_id, flags, status = ints[k, F_ID], ints[k, F_FLAGS], ints[k, F_STATUS]
             data = rows[k][HEADER.size : ints[k, F_SIZE]]
             if tap is not None:
-                tap(stamp, frame_id, flags, data, channel)
+                tap(stamp, frame_id, flags | RX, data, channel)
             if status == NOT_DECODED:
                 self._handle_undecoded(frame_id, flags, data, t)
                 continue

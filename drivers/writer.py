@@ -16,6 +16,7 @@ return value, so the tick decides what to do (the supervisor trips on it).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 
 import can
@@ -154,7 +155,7 @@ class FrameWriter:
         tx.counter = (tx.counter + 1) % COUNTER_MODULO
         tx.sent += 1
         if self.tap is not None:
-            self.tap(now, tx.codec.frame_id, tx.flags, data, self._channel)
+            self.tap(time.time(), tx.codec.frame_id, tx.flags, data, self._channel)
         return True
 
 

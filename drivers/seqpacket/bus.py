@@ -326,12 +326,12 @@ class SeqPacketBus(BusABC):
     def direct_fd(self) -> int:
         """The one connected socket's descriptor when its datagrams can be read straight off it, else -1.
 
-        That is when this node has exactly one connection (nothing to relay, no round robin) and
-        :attr:`raw_receive_ok`: the reader then takes them with its compiled receive
+        That is when this node has exactly one connection (nothing to relay, no round robin); the
+        caller checks :attr:`raw_receive_ok` first. The reader then takes them with its compiled receive
         (:meth:`drivers.decoder.Decoder.receive_datagrams`) and calls :meth:`note_direct_receive` after.
         """
         peers = self._peers
-        if len(peers) != 1 or self._closed or not self.raw_receive_ok:
+        if len(peers) != 1 or self._closed:
             return -1
         return peers[0].fileno()
 

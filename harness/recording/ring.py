@@ -14,7 +14,6 @@ the consumer also holds. ``FrameRing.push`` copies a frame's fields in about 1 u
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -175,6 +174,8 @@ class FrameRing:
     ) -> bool:
         """Copy one frame in from its fields; never blocks. False if full (dropped and counted).
 
+        A reader's and a writer's tap (:data:`drivers.frame_flags.FrameTap`) on the recorder's CAN log.
+
         Parameters
         ----------
         timestamp : float
@@ -207,16 +208,6 @@ class FrameRing:
             self._data_view[offset : offset + size] = data
         self._write = write + 1
         return True
-
-    def received(self, timestamp: float, frame_id: int, flags: int, data: bytes | bytearray | memoryview,
-                 channel: Any = None) -> bool:
-        """:meth:`push_fields` a frame this node received, whatever the bus marked it (a reader's tap)."""
-        return self.push_fields(timestamp, frame_id, flags | RX, data, channel)
-
-    def sent(self, timestamp: float, frame_id: int, flags: int, data: bytes | bytearray | memoryview,
-             channel: Any = None) -> bool:
-        """:meth:`push_fields` a frame this node sent, stamped with the wall clock now (a writer's tap)."""
-        return self.push_fields(time.time(), frame_id, flags & ~RX, data, channel)
 
     def _channel_index(self, channel: Any) -> int:
         index = self._channels.get(channel)

@@ -244,13 +244,13 @@ class RunFolder:
     def frame_taps(self) -> tuple[FrameTap, FrameTap]:
         """The taps a link's reader and writer call with every frame: ``(received, sent)``.
 
-        Each queues the frame straight into the recorder's ring with its direction (SocketCAN
-        marks frames from other processes of the same host ``is_rx=False``, so the side that
-        saw the frame decides) and, for sent frames, the wall-clock time (the writer stamps
-        them with loop time); received frames keep the time the reader gives (the bus's timestamp).
+        Both queue the frame straight into the recorder's ring with the direction its flags give
+        (:data:`drivers.frame_flags.RX` set by the side that saw the frame: SocketCAN marks frames
+        from other processes of the same host ``is_rx=False``) and the wall-clock time the side
+        gives (the writer stamps sent frames when they go out; the reader keeps the bus's timestamp).
         """
         frames = self._writer.frames
-        return frames.received, frames.sent
+        return frames.push_fields, frames.push_fields
 
     def record_event(self, t: float | None, kind: str, name: str, detail: Any = None) -> bool:
         """Queue an event (``kind`` e.g. lifecycle/trip/warning/interlock); never blocks; False if dropped."""
