@@ -49,7 +49,8 @@ def _run(duration_s: float) -> str:
     with tempfile.TemporaryDirectory() as tmp:
         profile = load_profile(REPO / "profiles" / "nceer_4dof.yaml")
         result = dry_run(profile, DryRunOptions(study=StudyOptions(duration_s=duration_s), log_dir=tmp, show_console=False))
-    return result.session.outcome
+    session = result.session
+    return session.outcome if session.outcome != "tripped" else f"tripped ({session.trip_reason})"
 
 
 def paths(duration_s: float, block: int) -> tuple[str, np.ndarray, np.ndarray]:
