@@ -45,6 +45,19 @@ PHASES = ("poll", "read", "estimator", "controller", "compensation", "supervisor
           "status", "total")
 
 
+#: The tick's own ``run``, which the measurements below wrap.
+_TICK_RUN = ControlTick.run
+
+
+def _run_with(run: Callable[..., object], duration_s: float) -> str:
+    """One default dry run with ``run`` in place of ``ControlTick.run``; its outcome."""
+    ControlTick.run = run  # type: ignore[method-assign,assignment]
+    try:
+        return _run(duration_s)
+    finally:
+        ControlTick.run = _TICK_RUN  # type: ignore[method-assign]
+
+
 def _run(duration_s: float) -> str:
     with tempfile.TemporaryDirectory() as tmp:
         profile = load_profile(REPO / "profiles" / "nceer_4dof.yaml")
@@ -57,7 +70,6 @@ def paths(duration_s: float, block: int) -> tuple[str, np.ndarray, np.ndarray]:
     """One dry run alternating the two paths every ``block`` ticks; (outcome, direct CPU, message CPU) per tick (us)."""
     direct: list[float] = []
     message: list[float] = []
-    original = ControlTick.run
     saved: dict[str, object] = {}
 
     def run(self: ControlTick, *args: object, **kwargs: object) -> object:
@@ -67,15 +79,11 @@ def paths(duration_s: float, block: int) -> tuple[str, np.ndarray, np.ndarray]:
         use_direct = (self.ticks // block) % 2 == 0
         reader._datagrams = saved["reader"] if use_direct else None  # type: ignore[assignment]
         writer._datagrams = saved["writer"] if use_direct else None  # type: ignore[assignment]
-        command = original(self, *args, **kwargs)  # type: ignore[arg-type]
+        command = _TICK_RUN(self, *args, **kwargs)  # type: ignore[arg-type]
         (direct if use_direct else message).append(self.cpu_s * 1e6)
         return command
 
-    ControlTick.run = run  # type: ignore[method-assign]
-    try:
-        outcome = _run(duration_s)
-    finally:
-        ControlTick.run = original  # type: ignore[method-assign]
+    outcome = _run_with(run, duration_s)
     warm = 2 * block  # the first blocks include the start
     return outcome, np.array(direct[warm:]), np.array(message[warm:])
 
@@ -102,7 +110,6 @@ def parts(duration_s: float) -> tuple[str, np.ndarray]:
     """
     totals = dict.fromkeys(PHASES[:-1], 0)
     rows: list[list[float]] = []
-    original = ControlTick.run
     restore: list[tuple[object, str, object]] = [(tick_module, "compensate", tick_module.compensate)]
 
     def wrap(tick: ControlTick) -> None:
@@ -123,16 +130,14 @@ def parts(duration_s: float) -> tuple[str, np.ndarray]:
             wrap(self)
         for phase in totals:
             totals[phase] = 0
-        command = original(self, *args, **kwargs)  # type: ignore[arg-type]
+        command = _TICK_RUN(self, *args, **kwargs)  # type: ignore[arg-type]
         totals["read"] -= totals["poll"]  # the tick's read polls the bus first: the poll is its own column
         rows.append([*(totals[phase] / 1e3 for phase in PHASES[:-1]), self.cpu_s * 1e6])
         return command
 
-    ControlTick.run = run  # type: ignore[method-assign]
     try:
-        outcome = _run(duration_s)
+        outcome = _run_with(run, duration_s)
     finally:
-        ControlTick.run = original  # type: ignore[method-assign]
         for owner, method, before in reversed(restore):
             if before is None:
                 delattr(owner, method)

@@ -1,9 +1,10 @@
 """The receive side's checks and decoding, compiled: one frame, or every frame one poll took off the bus.
 
-:class:`~drivers.decoder.Decoder` keeps its tables and state in the arrays of
-:class:`DecodeTables` and decodes through :func:`decode_frame` (one frame, any bus) or
-:func:`decode_datagrams` (a poll's worth of ``seqpacket`` datagrams in one call, the tick's
-path). Both run the same checks in the same order, so there is one definition of them:
+:class:`~drivers.decoder.Decoder` keeps its tables and state in the two arrays of
+:class:`DecoderArrays` and decodes through :func:`decode_frame` (one frame, any bus) or
+:func:`receive_datagrams` (every datagram waiting on a ``seqpacket`` socket, taken off it and
+decoded in one call: the tick's path; :func:`decode_datagrams` decodes datagrams already taken).
+All run the same checks in the same order, so there is one definition of them:
 
 1. an identifier of the protocol (11-bit, a message this node receives): else ``UNKNOWN_ID``;
 2. a data frame in the message's format (classic or CAN FD): else ``NOT_DATA``;
@@ -22,6 +23,9 @@ check it bit for bit against cantools.
 
 The tick's path allocates nothing: every array is made once, with the decoder. The kernels
 are compiled (or loaded from numba's cache) when the first decoder is made, never in a tick.
+They keep the interpreter's lock while they run (no ``nogil``): a call takes microseconds, and
+letting go of the lock in the tick would let the recorder's thread take it and make the loop
+wait for it back.
 """
 
 from __future__ import annotations
@@ -82,7 +86,7 @@ def signal_plan(signals: object) -> np.ndarray:
     return np.array(rows, dtype=np.float64).reshape(len(rows), PLAN_COLUMNS)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def crc_profile2(data: np.ndarray, offset: int, length: int, data_ids: np.ndarray, table: np.ndarray) -> int:
     """CRC-8/2F of payload bytes 1..length-1 then the counter's Data-ID (:func:`drivers.e2e.profile2_crc`)."""
     crc = CRC8_2F_INIT
@@ -92,7 +96,7 @@ def crc_profile2(data: np.ndarray, offset: int, length: int, data_ids: np.ndarra
     return crc ^ CRC8_2F_XOROUT
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def unpack_signals(data: np.ndarray, offset: int, plan: np.ndarray, count: int, out: np.ndarray, scratch: np.ndarray) -> bool:
     """Unpack ``count`` signals of the payload at ``data[offset:]`` into ``out[:count]`` (SI); False if one is out of range.
 
@@ -178,7 +182,7 @@ class DecoderArrays:
         self.out = self.floats[plan_size + value_size :]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def _decode(
     frame_id: int, flags: int, data: np.ndarray, offset: int, size: int, ints: np.ndarray, floats: np.ndarray,
     out: np.ndarray,
@@ -233,7 +237,7 @@ def _decode(
     return status, slot
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def decode_frame(frame_id: int, flags: int, data: np.ndarray, ints: np.ndarray, floats: np.ndarray) -> tuple[int, int]:
     """Check and decode one frame (payload ``data``, flags of :mod:`drivers.frame_flags`); ``(status, slot)``.
 
@@ -244,7 +248,7 @@ def decode_frame(frame_id: int, flags: int, data: np.ndarray, ints: np.ndarray, 
     return _decode(frame_id, flags, data, 0, len(data), ints, floats, out)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def decode_datagrams(
     datagrams: np.ndarray, frame_ints: np.ndarray, frame_values: np.ndarray, start: int, frames: int, ints: np.ndarray,
     floats: np.ndarray,
@@ -274,7 +278,7 @@ def decode_datagrams(
         frame_ints[k, F_SLOT] = slot
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)
 def receive_datagrams(
     fd: int, datagrams: np.ndarray, frame_ints: np.ndarray, frame_values: np.ndarray, capacity: int,
     ints: np.ndarray, floats: np.ndarray,

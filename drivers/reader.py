@@ -78,8 +78,7 @@ def damaged_estop(status: RxStatus) -> bool:
 
 def estop_frame_active(
     status: RxStatus, data: bytes | bytearray | memoryview, accepted: Sequence[float], codec: MessageCodec,
-    scratch: list[float],
-    active_index: int,
+    scratch: list[float], active_index: int,
 ) -> bool:
     """Whether a frame on the E-stop ID asks for a stop, judged fail-safe (both readers call this).
 
@@ -384,10 +383,12 @@ class FrameReader:
         """:meth:`poll` straight from a ``seqpacket`` bus's datagrams, with no :class:`can.Message` (the tick's path).
 
         The same frames in the same order as :meth:`_poll_messages` (the bus has no filters and no
-        local echo, :attr:`~drivers.seqpacket.bus.SeqPacketBus.raw_receive_ok`), stamped with the
-        wall clock as the bus stamps a Message. They are taken off the bus first, checked and decoded
-        in one compiled call (:meth:`~drivers.decoder.Decoder.decode_datagrams`), then accounted
-        one by one, in order, as :meth:`_handle` accounts a frame.
+        local echo, :attr:`~drivers.seqpacket.bus.SeqPacketBus.raw_receive_ok`). With one peer they
+        are taken off its socket and checked and decoded in one compiled call
+        (:meth:`~drivers.decoder.Decoder.receive_datagrams`); a hub relaying between peers takes
+        them through the bus (:meth:`_receive_each`). Then each is accounted, in order, as
+        :meth:`_handle` accounts a frame, stamped with the wall clock once for the poll (the frames
+        of one poll arrived within its microseconds).
         """
         batch = self._batch
         fd = bus.direct_fd
