@@ -58,8 +58,9 @@ class DatagramBatch:
     ----------
     rows : list of memoryview
         Writable views of the datagram rows, one per frame (``recv_into`` targets).
-    frame_ints : memoryview
-        Per frame (``frame_ints[k, column]``, columns :data:`~drivers.frame_kernel.F_SIZE` ...): datagram
+    frame_ints, flat_ints : memoryview
+        Per frame (``frame_ints[k, column]``, columns :data:`~drivers.frame_kernel.F_SIZE` ...; ``flat_ints``
+        the same memory in one dimension): datagram
         size (bytes, the caller writes it), identifier, flags (:mod:`drivers.frame_flags`), status code
         (:data:`drivers.frame_kernel.NOT_DECODED` for an error frame or a foreign identifier), message slot.
     value_rows : list of memoryview
@@ -71,6 +72,8 @@ class DatagramBatch:
         self.rows = [row.data for row in self.datagrams]
         self.ints = np.zeros((capacity, kernel.FRAME_COLUMNS), dtype=np.int64)
         self.frame_ints = self.ints.data
+        #: The same, flat: frame ``k``'s column ``c`` at ``k * FRAME_COLUMNS + c`` (no index tuple to build).
+        self.flat_ints = self.ints.reshape(-1).data
         self.frame_values = np.zeros((capacity, max_signals))
         self.value_rows = [row.data for row in self.frame_values]
 

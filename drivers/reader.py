@@ -39,7 +39,7 @@ from drivers.codec import MessageCodec, Protocol
 from drivers.decoder import STATUS_OF, Decoder, RxStatus
 from drivers.errors import BusError, ProtocolError
 from drivers.frame_flags import ERROR, EXTENDED, FD, REMOTE, RX, FrameTap, flags_of
-from drivers.frame_kernel import CAPPED, EMPTY, F_FLAGS, F_ID, F_SIZE, F_STATUS, NOT_DECODED
+from drivers.frame_kernel import CAPPED, EMPTY, F_FLAGS, F_ID, F_SIZE, F_STATUS, FRAME_COLUMNS, NOT_DECODED
 from drivers.measurements import Measurements
 from drivers.protocol_values import SENSOR_SET_PARTS, DriveState, EstopSource
 from drivers.seqpacket.bus import SeqPacketBus
@@ -405,10 +405,11 @@ class FrameReader:
             return 0
         stamp = time.time()
         t = self._message_time(stamp, now) if self.use_msg_timestamp else now
-        tap, channel, rows, ints = self.tap, bus.channel, batch.rows, batch.frame_ints
+        tap, channel, rows, ints = self.tap, bus.channel, batch.rows, batch.flat_ints
         for k in range(frames):
-            frame_id, flags, status = ints[k, F_ID], ints[k, F_FLAGS], ints[k, F_STATUS]
-            data = rows[k][HEADER.size : ints[k, F_SIZE]]
+            at = k * FRAME_COLUMNS
+            frame_id, flags, status = ints[at + F_ID], ints[at + F_FLAGS], ints[at + F_STATUS]
+            data = rows[k][HEADER.size : ints[at + F_SIZE]]
             if tap is not None:
                 tap(stamp, frame_id, flags | RX, data, channel)
             if status == NOT_DECODED:
