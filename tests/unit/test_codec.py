@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from drivers.codec import (
     DEFAULT_DBC,
     MessageCodec,
+    Protocol,
     check_protocol_version,
     load_protocol,
 )
@@ -20,6 +21,7 @@ from drivers.e2e import protect
 from harness.errors import ProtocolError
 
 PROTOCOL = load_protocol()
+FD_PROTOCOL = load_protocol(fd=True)
 NAMES = sorted(PROTOCOL.messages)
 
 
@@ -75,15 +77,21 @@ def test_round_trip_every_message_full_range(name: str, data: st.DataObject) -> 
     assert decoder.values(name) == pytest.approx(values, rel=1e-12, abs=1e-12)
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize(
+    ("protocol", "name"),
+    [(PROTOCOL, name) for name in NAMES] + [(FD_PROTOCOL, name) for name in sorted(FD_PROTOCOL.messages)],
+    ids=[name for name in NAMES] + [f"fd-{name}" for name in sorted(FD_PROTOCOL.messages)],
+)
 @settings(max_examples=40, deadline=None)
 @given(data=st.data())
-def test_encoding_agrees_with_cantools(name: str, data: st.DataObject) -> None:
-    codec = PROTOCOL[name]
+def test_encoding_agrees_with_cantools(protocol: Protocol, name: str, data: st.DataObject) -> None:
+    """Classic and CAN FD alike: our frame is cantools' frame, and our decoder gives the values back."""
+    codec = protocol[name]
     values = data.draw(raw_values(codec))
     counter = data.draw(st.integers(0, 15))
     ours = protected(codec, values, counter)
-    message = PROTOCOL.database.get_message_by_name(name)
+    message = protocol.database.get_message_by_name(name)
+    assert bool(message.is_fd) == protocol.fd
     decoded = message.decode(bytes(ours), decode_choices=False, scaling=True)
     assert decoded["counter"] == counter
     for sig, value in zip(codec.signals, values, strict=True):
@@ -91,6 +99,9 @@ def test_encoding_agrees_with_cantools(name: str, data: st.DataObject) -> None:
     theirs = bytearray(message.encode({"crc": 0, "counter": counter, **dict(zip(codec.signal_names, values, strict=True))}))
     protect(theirs, counter, codec.data_ids)
     assert theirs == ours
+    decoder = Decoder(protocol)
+    assert decoder.decode(codec.frame_id, ours, fd=protocol.fd) == RxStatus.OK
+    assert decoder.values(name) == pytest.approx(values, rel=1e-12, abs=1e-12)
 
 
 def test_encode_rounds_to_the_grid() -> None:
