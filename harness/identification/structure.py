@@ -127,22 +127,33 @@ def structure_record(run: RunData, n_stories: int, band_hz: tuple[float, float] 
     return band_passed(run.path.name, rate_hz, signals[layout.BASE_ACCELERATION], floors, band), band
 
 
-def check_band_bins(measured: MeasuredResponse, band_hz: tuple[float, float]) -> None:
+def check_band_bins(measured: MeasuredResponse, band_hz: tuple[float, float], given: bool) -> None:
     """Refuse a band holding fewer than :data:`~harness.identification.frf.MIN_BAND_BINS` frequencies of the measured response.
+
+    The response has a frequency every ``1 / segment`` Hz, and a segment is at most a quarter
+    of the shortest run (:func:`~harness.identification.structure_records.frf_estimate`).
+
+    Parameters
+    ----------
+    measured : MeasuredResponse
+    band_hz : tuple of float
+    given : bool
+        True if ``--band-hz`` set the band (else it is :func:`default_band`).
 
     Raises
     ------
     IdentificationError
-        Naming ``--band-hz``, the frequencies it holds at the response's resolution and the
-        narrowest band that would hold enough.
+        Naming the band, the frequencies it holds at the response's resolution and what would hold enough.
     """
     inside = int(np.count_nonzero((measured.freq_hz >= band_hz[0]) & (measured.freq_hz <= band_hz[1])))
     if inside < MIN_BAND_BINS:
         step_hz = float(measured.freq_hz[1] - measured.freq_hz[0])
+        band = f"--band-hz {band_hz[0]:g},{band_hz[1]:g}" if given else \
+            f"the default band {band_hz[0]:.3g}-{band_hz[1]:.3g} Hz (the design's modes)"
         raise IdentificationError(
-            f"--band-hz {band_hz[0]:g},{band_hz[1]:g}: holds {inside} frequencies of the measured response (every "
-            f"{step_hz:.3g} Hz); expected a band at least {MIN_BAND_BINS * step_hz:.3g} Hz wide, holding {MIN_BAND_BINS} "
-            "or more (the fit needs a response, not a point)"
+            f"{band} holds {inside} frequencies of the measured response (one every {step_hz:.3g} Hz); expected at least "
+            f"{MIN_BAND_BINS}, a response to fit and not a point: a band at least {MIN_BAND_BINS * step_hz:.3g} Hz wide, "
+            "or longer runs (a segment is at most a quarter of the shortest run, so a longer run resolves finer)"
         )
 
 
@@ -265,7 +276,7 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
                                   "expected runs of one loop rate (identify each rate on its own)")
     model: DampingModel = damping_model or ("proportional" if design.first_mode_damping_ratio is not None else "per_story")
     measured = frf_estimate(records, RESOLUTION_HZ)
-    check_band_bins(measured, band)
+    check_band_bins(measured, band, band_hz is not None)
     modal = fit_modes(records, [float(f) for f in start_frequencies(measured, design, band)])
     stories = fit_stories(records, design, modal.frequency_hz, float(modal.damping_ratio[0]), model)
     modes, stiffness, damping = _determinations(modal, stories, band)
