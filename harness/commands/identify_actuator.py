@@ -36,9 +36,9 @@ BAND_FREQUENCY = limits.NumberRange(0.0, limits.MAX_RATE_HZ / 2, "Hz")
 EXAMPLES = """\
 examples:
   harness identify actuator --out frf/ --duration 20              (virtual rig, free, lockstep)
-  harness identify actuator --out frf/ --both --amplitude-N 1500 --band-hz 0.5,40
-  harness identify actuator nceer_4dof --out frf/ --signal random --seed 3 --duration 60
-  harness identify actuator profiles/my_rig.yaml --interface socketcan --channel can0 --blocked --out frf/
+  harness identify actuator --out frf_both/ --both --amplitude-N 1500 --band-hz 0.5,40
+  harness identify actuator nceer_4dof --out frf_random/ --signal random --seed 3 --duration 60
+  harness identify actuator profiles/my_rig.yaml --interface socketcan --channel can0 --blocked --out frf_rig/
 
 DIR gets frf.csv (free) and frf_blocked.csv (blocked): freq_hz,magnitude,phase_deg,coherence
 within the band, frf_velocity.csv (free: command to sliding velocity), frf.png (the Bode plot

@@ -138,9 +138,9 @@ def identify_bearing(paths: Sequence[Path | str], out_dir: Path, lowpass_hz: flo
         buildings with different masses.
     """
     runs = load_runs_checked(paths)
+    building = same_building(runs)
     used = distinct_runs_used(runs)
     claim_result_folder(out_dir, RESULT_FILES, force)
-    building = same_building(runs)
     records = [sliding_record(run, building) for run in runs]
     design = design_bearing(runs[0])
     fit = ff.fit_friction(records, design, building.total_weight_N, lowpass_hz)

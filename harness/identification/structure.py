@@ -266,9 +266,9 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
     RunFolderError, IdentificationError
     """
     runs = load_runs_checked(paths)
+    design = same_building(runs)
     used = distinct_runs_used(runs)
     claim_result_folder(out_dir, RESULT_FILES, force)
-    design = same_building(runs)
     records, bands = zip(*(structure_record(run, design.n_stories, band_hz, design) for run in runs), strict=True)
     band = bands[0]
     if len({round(r.rate_hz, 6) for r in records}) > 1:
