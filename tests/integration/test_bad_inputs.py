@@ -268,6 +268,9 @@ BAD_ARGUMENTS = {
                             ["/dev/zero", "is a character device, not a file", "expected an existing YAML file"]),
     "study_named_dot_dot": (["sweep", "{tmp}/dots_study.yaml"], ["dots_study.yaml", "name: found '..'", "dots only"]),
     "mu_max_above_one": (["simulate", "--set", "bearing.mu_max=2"], ["bearing.mu_max", "found 2", "<= 1"]),
+    "sweep_sample_of_mu_max_above_one": (  # read "<= 1 1": a ratio's unit "1" after its bound
+        ["sweep", "{tmp}/mu_study.yaml"], ["mu_study.yaml", "monte_carlo", "bearing.mu_max", "expected a value >= 0 and <= 1 ("],
+    ),
 }
 
 #: Paths of the table that exist on Linux only.
@@ -346,6 +349,9 @@ def _identification_inputs(tmp: Path) -> None:
         (tmp / "earlier_results" / name).write_text("{}\n")
     (tmp / "dots_study.yaml").write_text(f"profile: {PROFILES / 'nceer_4dof.yaml'}\nname: '..'\noptions: {{duration_s: 1}}\n"
                                          "axes: {records: [synthetic], pga_g: [0.1]}\n")
+    (tmp / "mu_study.yaml").write_text(f"profile: {PROFILES / 'nceer_4dof.yaml'}\nname: mu\noptions: {{duration_s: 1}}\n"
+                                       "axes: {records: [synthetic], pga_g: [0.1]}\nmonte_carlo: {samples: 2, seed: 1, set: "
+                                       "{bearing.mu_max: {kind: uniform, low: 1.2, high: 1.5}}}\n")
 
 
 def _unchanged_inputs(inputs: Path) -> None:
