@@ -18,6 +18,7 @@ import dataclasses
 import functools
 import json
 import os
+import secrets
 import subprocess
 import sys
 import time
@@ -108,7 +109,8 @@ def _rig_process(profile: Profile, can, lockstep: bool) -> subprocess.Popen:
 
     The rig gets the profile this dry run resolved (``--set``, ``--variant`` and every
     option folded in) as a JSON document on its standard input: it parses no options
-    of its own, so it cannot run a different profile from the loop's.
+    of its own, so it cannot run a different profile from the loop's. On a ``seqpacket``
+    channel it admits only this process at the other end (harness/runs/rig_process.py).
     """
     job = {"profile": profile.resolved_data(), "interface": can.interface, "channel": can.channel,
            "lockstep": lockstep, "parent_pid": os.getpid()}
@@ -144,6 +146,8 @@ class RigCoordinator:
         appear_timeout_s: float = RIG_APPEAR_TIMEOUT_S,
     ):
         self.lockstep = lockstep
+        #: The rig process's id, the one peer the harness's side of a private channel admits; () for none.
+        self.peer_pids: tuple[int, ...] = () if process is None else (process.pid,)
         self.period_s = period_s
         self.process = process
         self.appear_timeout_s = appear_timeout_s
@@ -281,13 +285,22 @@ def record_span_s(session: SessionResult, motion: GroundMotion) -> float | None:
     return span if span < motion.duration_s else None
 
 
-def private_bus(can: CanConfig, external_rig: bool, suffix: str = "") -> CanConfig:
-    """``can`` on a channel private to this process (and ``suffix``) when the rig is ours on the private bus.
+#: Random bytes in the name of a dry run's private channel (hex-encoded: twice as many characters).
+CHANNEL_TOKEN_BYTES = 8
 
-    Two dry runs at once (or a test suite) then never meet on one ``seqpacket`` channel.
+
+def private_bus(can: CanConfig, external_rig: bool, suffix: str = "") -> CanConfig:
+    """``can`` on a channel private to this run (and ``suffix``) when the rig is ours on the private bus.
+
+    Two dry runs at once (or a test suite) then never meet on one ``seqpacket`` channel. The name
+    carries random bytes, so nobody can bind it before this run (a plain name is a socket in this
+    user's private directory, which no other user can write: drivers/seqpacket/channel.py); the rig
+    process is handed it, and each end admits only the other's process (:func:`_rig_process`,
+    ``SessionSettings.peer_pids``).
     """
     if can.interface == PRIVATE_BUS_INTERFACE and not external_rig:
-        return dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}{suffix}")
+        token = secrets.token_hex(CHANNEL_TOKEN_BYTES)
+        return dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}-{token}{suffix}")
     return can
 
 
@@ -359,6 +372,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     )
     check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:
+        settings.peer_pids = coordinator.peer_pids
         session = run_session(
             profile, settings, on_start=coordinator.table.start,
             make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
