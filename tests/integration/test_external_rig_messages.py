@@ -34,3 +34,14 @@ def test_reset_drive_without_external_rig_says_why_even_when_quiet(capsys: pytes
     assert main(["dry-run", "--reset-drive", "--quiet"]) == exit_codes.INPUT_ERROR
     out = capsys.readouterr()
     assert "--reset-drive resets the drive of a rig that already serves the channel" in out.out + out.err
+
+
+def test_a_start_the_rig_refused_is_reported_and_the_run_is_not_a_completed_test(
+    tmp_path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+) -> None:
+    # The rig's answer itself is proven in tests/integration/test_rig_bus.py; here, what the command makes of it.
+    monkeypatch.setattr(RigCoordinator, "start_refused", lambda self: True)
+    status = main(["dry-run", "--lockstep", "--quiet", "--duration", "1", "--log-dir", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert status == exit_codes.STOPPED
+    assert "the rig refused this run's table start" in out and "did not play this run's record" in out

@@ -36,6 +36,7 @@ from harness.rig.config import (
 )
 from harness.rig.faults import fault_id_for
 from harness.rig.virtual_rig import RigParts, VirtualRig
+from harness.runs.dry_run import RigCoordinator
 from harness.runs.options import StudyOptions, prepare_motion
 from harness.runs.rig_service import run_rig_command
 from harness.safety.lifecycle import State
@@ -164,8 +165,12 @@ def test_a_start_while_the_table_runs_is_answered_with_start_refused(bench):
     assert b.value("RIG_STATUS", "start_refused") == 1, "the rig answers a start it cannot obey, at once in lockstep"
     assert b.value("RIG_STATUS", "record_time") == pytest.approx(record_time, abs=1e-4), "the record was not restarted"
     assert any("start table refused" in line for _, line in b.rig.journal.drain())
+    coordinator = RigCoordinator(True, PERIOD)
+    coordinator.link = b.link
+    assert coordinator.start_refused(), "the dry run reads the rig's answer"
     b.control(RigCommand.STOP_TABLE)
     assert b.value("RIG_STATUS", "start_refused") == 0 and b.value("RIG_STATUS", "table_running") == 0
+    assert not coordinator.start_refused()
     b.control(RigCommand.START_TABLE)
     b.step()
     assert b.value("RIG_STATUS", "start_refused") == 0 and b.value("RIG_STATUS", "table_running") == 1
