@@ -26,6 +26,7 @@ from harness.commands.options import (
     wrap,
 )
 from harness.commands.output import (
+    command_console,
     compile_kernels,
     print_always,
     print_host_timing,
@@ -85,8 +86,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.runs.options import resolve_profile
 
     if args.reset_drive and not args.external_rig:
-        print_always(console, "[bold red]error:[/] --reset-drive resets the drive of a rig that already serves the channel: "
-                     "add --external-rig (a rig this command starts has a fresh drive)", highlight=False)
+        command_console(stderr=True).print(  # an error: on standard error, and never silenced by --quiet
+            "[bold red]error:[/] --reset-drive resets the drive of a rig that already serves the channel: "
+            "add --external-rig (a rig this command starts has a fresh drive)", highlight=False, soft_wrap=True)
         return exit_codes.INPUT_ERROR
     profile = load_acknowledged(args, console)
     study = study_options(args, controller=args.controller, rate_hz=args.rate)
