@@ -61,7 +61,7 @@ TABLE_START_REFUSED = (
     "did not play this run's record; the peaks below are not this record's"
 )
 #: After this long without a RIG_STATUS frame from an external rig, say so, and how much longer the wait lasts (s).
-NO_RIG_NOTICE_S = 5.0
+NO_RIG_NOTICE_S = 4.0
 IN_PROCESS_SWITCH_INTERVAL_S = 2e-4
 #: Frames the harness sends to bring the rig into lockstep, and to show it the command counter, before the run.
 #: The rig's E2E check rejects the first frame of a harness that follows another within its new-sender

@@ -16,17 +16,17 @@ from harness.runs.dry_run import NO_RIG_NOTICE_S, RigCoordinator
 
 
 def test_no_external_rig_is_said_within_five_seconds_with_the_wait_left() -> None:
+    assert NO_RIG_NOTICE_S < 5.0, "the issue asks to be told within 5 s"
     notes: list[tuple[float, str]] = []
     coordinator = RigCoordinator(True, 0.002, appear_timeout_s=NO_RIG_NOTICE_S + 0.5,
                                  notify=lambda line: notes.append((time.monotonic(), line)))
     start = time.monotonic()
     with open_harness(CanConfig(interface="seqpacket", channel=f"norig-{uuid.uuid4().hex[:8]}")) as link, \
-            pytest.raises(BusError, match=r"no RIG_STATUS frame from a virtual rig within 5.5 s"):
+            pytest.raises(BusError, match=rf"no RIG_STATUS frame from a virtual rig within {NO_RIG_NOTICE_S + 0.5:g} s"):
         coordinator.on_link(link)
     assert len(notes) == 1, notes
     at, line = notes[0]
-    assert NO_RIG_NOTICE_S <= at - start < NO_RIG_NOTICE_S + 0.4
-    assert NO_RIG_NOTICE_S <= 5.0, "the issue asks to be told within 5 s"
+    assert NO_RIG_NOTICE_S <= at - start < 5.0, "told within 5 s"
     assert "no rig answers" in line and "waiting 0.5 s more" in line
 
 
