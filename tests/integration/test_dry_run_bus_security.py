@@ -2,8 +2,8 @@
 
 The relay is another process of the same user: the peer check by user cannot tell it from the
 rig, so the dry run pins each end to the other's process (``SessionSettings.peer_pids``, the rig
-process's ``parent_pid``). Its channel name carries random bytes (``private_bus``); here they are
-made known to the relay, as if it had guessed them.
+process's ``parent_pid``). Its channel name carries random bytes (``private_bus``); here the name is
+made known to the relay, as if it had guessed it.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -35,8 +36,8 @@ while time.monotonic() < deadline:
 def test_a_relay_sitting_on_the_private_channel_is_refused_before_anything_moves(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setattr(dry_run_module.secrets, "token_hex", lambda n: "guessed")
     channel = f"harness-{os.getpid()}-guessed"
+    monkeypatch.setattr(dry_run_module, "private_bus", lambda can, external_rig, suffix="": replace(can, channel=channel))
     relay = subprocess.Popen([sys.executable, "-c", RELAY, channel], cwd=ROOT, stdout=subprocess.PIPE, text=True)
     try:
         assert relay.stdout is not None and relay.stdout.readline().strip() == "ready"

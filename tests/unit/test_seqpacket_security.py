@@ -26,7 +26,6 @@ from drivers.errors import BusError
 from drivers.seqpacket import channel as channel_module
 from drivers.seqpacket.bus import SeqPacketBus
 from drivers.seqpacket.channel import parse_channel
-from drivers.seqpacket.peers import PeerCredentials, PeerPolicy
 from drivers.seqpacket.wire import encode_frame
 
 STRANGER_UID = 65534  # nobody
@@ -310,6 +309,8 @@ def test_a_node_refuses_a_hub_that_is_not_the_expected_process(buses: list[SeqPa
 
 
 def test_policy_admits_the_user_and_the_named_group_only() -> None:
+    from drivers.seqpacket.peers import PeerCredentials, PeerPolicy
+
     policy = PeerPolicy(uid=1000, group_gid=50, member_uids=frozenset({1001}))
     assert policy.refusal(PeerCredentials(10, 1000, 1000)) == ""
     assert policy.refusal(PeerCredentials(10, 1002, 50)) == ""  # primary group
