@@ -19,7 +19,8 @@ EXIT_STATUS = """\
 exit status:
   0  completed            3  tripped safely (force zeroed, drive disabled), or
   1  internal error (bug)     completed but the record was lost (repeat the test)
-  2  bad input or refused configuration, before anything moved
+  2  bad input or refused configuration, before this command moved anything
+     (a table an external rig already runs is refused, and said so)
   4  stopped early (safe stop) by the operator, or by a check (e.g. the table
      not playing the told record)
 """

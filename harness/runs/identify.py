@@ -244,6 +244,7 @@ def run_condition(
     )
     if virtual:
         with serving_virtual_rig(profile, can, options.in_lockstep, prepare_motion(profile)) as coordinator:
+            settings.peer_pids = coordinator.peer_pids  # the private channel admits only the rig process
             return run_session(
                 profile, settings, controller=controller, on_start=controller.start, on_link=coordinator.on_link,
                 make_lockstep=coordinator.lockstep_wait if options.in_lockstep else None,

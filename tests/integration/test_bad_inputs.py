@@ -201,6 +201,10 @@ BAD_ARGUMENTS = {
         ["sweep", "{tmp}/huge_study.yaml", "--plan"],
         ["huge_study.yaml", "axes", "10000000 cases", "10 records x 1000 PGA levels", "expected at most 100000 (MAX_CASES)"],
     ),
+    "reset_drive_without_external_rig_quiet": (["dry-run", "--reset-drive", "--quiet"],
+                                               ["--reset-drive resets the drive", "add --external-rig"]),
+    "study_record_is_not_a_record": (["sweep", "{tmp}/secret_study.yaml"],
+                                     ["secret_study.yaml", "axes.records[0]", "is not a record file"]),
     "sweep_of_ten_million_cases": (["sweep", "{tmp}/huge_study.yaml"], ["huge_study.yaml", "axes", "(MAX_CASES)"]),
     # --- second review: unclear messages, and a run folder written ---
     "lockstep_rate_0_001": (
@@ -315,6 +319,8 @@ def inputs(tmp_path_factory) -> Path:
     study = f"profile: {profile}\noptions: {{duration_s: 1}}\n"
     (tmp / "deep_study.yaml").write_text(study + "name: " + "[" * 500 + "]" * 500 + "\n")
     (tmp / "bomb_study.yaml").write_text(study + ALIAS_BOMB + "name: *l8\n")
+    (tmp / "secret").write_text("root:$6$hash-that-must-not-be-echoed:19000:0:99999:7:::\n")
+    (tmp / "secret_study.yaml").write_text(study + f"name: secret\naxes:\n  records: [{tmp / 'secret'}]\n")
     records = ", ".join(f'"synthetic:{seed}"' for seed in range(1, 11))
     (tmp / "huge_study.yaml").write_text(
         study + f"name: huge\naxes:\n  records: [{records}]\n  pga_levels: {{start_g: 0.1, stop_g: 0.4, count: 1000}}\n"
