@@ -1,0 +1,114 @@
+"""A loop stall is named as the stall, not as what it let happen: the supervisor's order and the loop's gap trace."""
+
+from __future__ import annotations
+
+import pytest
+
+from drivers.protocol_values import FaultCode
+from harness.loop.timing import GAP_PARTS, GapTrace
+from harness.safety.config import SafetyConfig
+from harness.safety.health import TickHealth
+from harness.safety.lifecycle import State
+from harness.safety.supervisor import Supervisor
+
+PERIOD_S = 0.002
+
+
+def _running() -> tuple[Supervisor, TickHealth]:
+    supervisor, health = Supervisor(SafetyConfig(), period_s=PERIOD_S), TickHealth()
+    supervisor.arm(0.0, health)
+    supervisor.start(0.0)
+    health.table_fresh = health.base_fresh = False
+    return supervisor, health
+
+
+def test_a_stall_and_the_drives_watchdog_fault_in_one_tick_trip_loop_stall_naming_both() -> None:
+    supervisor, health = _running()
+    supervisor.update(PERIOD_S, PERIOD_S, health, 0.0)
+    health.stall_s, health.missed_periods = 0.1013, 49  # the loop was away longer than the drive's 50 ms watchdog
+    health.drive_fault, health.drive_ready, health.drive_fault_code = True, False, int(FaultCode.HEARTBEAT_WATCHDOG)
+    command = supervisor.update(0.104, 0.102, health, 0.0)
+    assert supervisor.state is State.TRIPPED and command.trip_reason == "loop_stall"
+    detail = supervisor.trip_detail
+    assert "101.3 ms without a command (49 missed periods)" in detail
+    assert "fault code 2 (HEARTBEAT_WATCHDOG) after it, a consequence of the stall" in detail
+    assert command.force_N == 0.0 and not command.enable
+
+
+def test_a_drive_fault_with_no_stall_is_the_drives_and_names_its_code() -> None:
+    supervisor, health = _running()
+    health.stall_s = 0.02  # at the budget: ridden through
+    health.drive_fault, health.drive_fault_code = True, int(FaultCode.PRESSURE_LOST)
+    command = supervisor.update(PERIOD_S, PERIOD_S, health, 0.0)
+    assert command.trip_reason == "drive_fault"
+    assert supervisor.trip_detail == "actuator drive reports a fault: fault code 3 (PRESSURE_LOST)"
+
+
+def test_a_stall_alone_names_no_drive_fault() -> None:
+    supervisor, health = _running()
+    health.stall_s, health.missed_periods = 0.045, 21
+    supervisor.update(PERIOD_S, PERIOD_S, health, 0.0)
+    assert supervisor.command.trip_reason == "loop_stall" and "drive" not in supervisor.trip_detail
+
+
+def test_the_operators_estop_in_the_same_tick_as_a_stall_is_the_operators() -> None:
+    supervisor, health = _running()
+    health.stall_s, health.estop = 0.1, True
+    supervisor.update(PERIOD_S, PERIOD_S, health, 0.0)
+    assert supervisor.command.trip_reason == "estop"  # the operator's act is no consequence of the stall
+
+
+class Clock:
+    """A clock a test moves by hand."""
+
+    def __init__(self) -> None:
+        self.now = 10.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def test_the_gap_trace_splits_a_gap_into_its_parts_and_names_the_longest() -> None:
+    clock = Clock()
+    trace = GapTrace(clock)
+    trace.woke()  # the first tick begins at 10.0
+    spent_ms = {"read": 0.1, "control": 0.3, "supervise": 0.06, "write": 0.02, "record": 0.2, "phase": 95.0}
+    for part, name in enumerate(GAP_PARTS[:-1]):
+        clock.now += spent_ms[name] * 1e-3
+        trace.mark(part)
+    clock.now += 1.5e-3  # the wait
+    trace.woke()
+    expected = [*(spent_ms[name] * 1e-3 for name in GAP_PARTS[:-1]), 1.5e-3]
+    assert trace.parts_s == pytest.approx(expected, abs=1e-12)
+    assert GAP_PARTS[trace.longest_part()] == "phase"
+    words = trace.describe()
+    assert words.startswith("the loop was the loop's phases, console status and timing for 95.0 ms (phase; parts in ms:")
+    assert "read 0.1, control 0.3, supervise 0.1, write 0.0, record 0.2, phase 95.0, wait 1.5)" in words
+    assert trace.marks[0] == clock.now  # the next tick begins where the wait ended
+
+
+def test_a_part_the_tick_skipped_counts_nothing_and_the_wait_takes_the_rest() -> None:
+    clock = Clock()
+    trace = GapTrace(clock)
+    trace.woke()
+    clock.now += 0.001
+    trace.mark(0)  # read
+    clock.now += 0.002
+    trace.mark(2)  # supervise: control was skipped (the controller raised)
+    clock.now += 0.120  # then the loop stalled before it wrote anything more
+    trace.woke()
+    assert trace.parts_s == pytest.approx([0.001, 0.0, 0.002, 0.0, 0.0, 0.0, 0.120], abs=1e-12)
+    assert GAP_PARTS[trace.longest_part()] == "wait"
+    assert trace.describe().startswith("the loop was waiting for the next deadline (sleep and spin) for 120.0 ms (wait;")
+
+
+def test_the_first_part_wins_a_tie() -> None:
+    clock = Clock()
+    trace = GapTrace(clock)
+    trace.woke()
+    for part in range(len(GAP_PARTS) - 1):
+        clock.now += 0.001
+        trace.mark(part)
+    clock.now += 0.001
+    trace.woke()
+    assert trace.longest_part() == 0
