@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.protocol_values import FaultCode
+from drivers.protocol_values import DriveState, FaultCode
 from harness.loop.timing import GAP_PARTS, GapTrace
 from harness.safety.config import SafetyConfig
 from harness.safety.health import TickHealth
 from harness.safety.lifecycle import State
 from harness.safety.supervisor import Supervisor
+from tests.unit.test_control_tick import Bench
 
 PERIOD_S = 0.002
 
@@ -112,3 +113,42 @@ def test_the_first_part_wins_a_tie() -> None:
     clock.now += 0.001
     trace.woke()
     assert trace.longest_part() == 0
+
+
+class Counter:
+    """A clock that reads 1, 2, 3, ...: the order of the marks, one read each."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        self.now += 1.0
+        return self.now
+
+
+def test_the_tick_marks_each_of_its_parts_once_in_order() -> None:
+    bench = Bench()
+    try:
+        bench.tick.trace = GapTrace(Counter())
+        bench.step()
+        assert bench.tick.trace.marks == [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 0.0, 0.0]  # read .. record; phase and wait: the loop's
+        bench.controller.raise_next = True
+        bench.tick.trace = GapTrace(Counter())
+        bench.step()  # the controller raises: the control part is skipped, the rest still marked
+        assert bench.tick.trace.marks == [0.0, 1.0, 0.0, 2.0, 3.0, 4.0, 0.0, 0.0]
+    finally:
+        bench.close()
+
+
+def test_the_tick_reads_the_drives_fault_code_and_drive_fault_names_it() -> None:
+    bench = Bench()
+    try:
+        bench.run_until_running()
+        bench.publish()
+        bench.rig.writer.actuator_status(0.0, DriveState.FAULT, True, FaultCode.HEARTBEAT_WATCHDOG, bench.t)
+        command = bench.tick.run(bench.t, PERIOD_S, bench.t)
+        assert bench.tick.health.drive_fault_code == int(FaultCode.HEARTBEAT_WATCHDOG)
+        assert command.trip_reason == "drive_fault"  # no stall: the drive's own fault
+        assert bench.supervisor.trip_detail == "actuator drive reports a fault: fault code 2 (HEARTBEAT_WATCHDOG)"
+    finally:
+        bench.close()
