@@ -152,3 +152,29 @@ def test_the_tick_reads_the_drives_fault_code_and_drive_fault_names_it() -> None
         assert bench.supervisor.trip_detail == "actuator drive reports a fault: fault code 2 (HEARTBEAT_WATCHDOG)"
     finally:
         bench.close()
+
+
+def test_a_gap_past_the_budget_before_arming_is_recorded_and_named_in_a_refusal_to_arm() -> None:
+    from harness.loop.runner import ControlLoop
+    from harness.profile import load_profile
+
+    bench = Bench()
+    try:
+        loop = ControlLoop(bench.tick, load_profile(None).loop, 1.0 / PERIOD_S, 1.0)
+        assert loop._stall_note() == ""  # no gap past the budget yet: nothing to add
+        drained: list[tuple[str, str]] = []
+        missed = loop._note_stall(0.3, 0.0199, 0.3)  # within the budget: ridden through, not past it
+        assert missed == 8 and loop.gaps_past_budget == 0 and loop.stalls == 1
+        missed = loop._note_stall(0.5, 0.1013, 0.5014)  # in IDLE (the loop's phase before arming)
+        assert missed == 49 and loop.gaps_past_budget == 1 and loop.stalls == 1
+        assert loop.longest_stall_s == 0.1013 and loop.last_gap_past_budget_s == 0.1013
+        bench.supervisor.events.drain(lambda t, kind, name, detail: drained.append((name, detail)))
+        name, detail = drained[-1]
+        assert name == "stall_past_budget"
+        assert detail.startswith("101.3 ms between two ticks (49 missed periods), past the 20.0 ms stall budget: "
+                                 "from 0.4001 s to 0.5014 s (loop time), begun in IDLE; the loop was ")
+        note = loop._stall_note()
+        assert note.startswith("; the loop itself stalled 101.3 ms up to t = 0.500 s, past its 20.0 ms stall budget")
+        assert "a drive's watchdog fault after it is the stall's" in note
+    finally:
+        bench.close()
