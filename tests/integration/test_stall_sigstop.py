@@ -25,7 +25,7 @@ import pytest
 from harness import exit_codes
 
 STOP_S = 0.15
-DURATION_S = 6.0
+DURATION_S = 8.0
 
 
 def _running_folder(log_dir: Path, process: subprocess.Popen, timeout_s: float = 120.0) -> Path | None:
