@@ -7,9 +7,9 @@ force. It returns the same preallocated :class:`SupervisedCommand` every tick.
 
 The checks run in the fixed order of :data:`harness.safety.checks.CHECKS` (in ARMED, RUNNING
 and STOPPING; the first TRIP wins and is latched as the reason, later checks are not evaluated
-on that tick): the loop's time, then every detector (operator, sensors, CAN, actuator, stalls,
-the table against its record), then the controller's output and the stroke trips, then the
-force shaping (clamp, stopping ramp, rate limit, stroke fade). STOPPING becomes DONE on the
+on that tick): the loop's time, then every detector (operator, stalls, sensors, CAN, actuator and
+the force's oscillation, the table against its record), then the controller's output and the
+stroke trips, then the force shaping (clamp, stopping ramp, rate limit, stroke fade). STOPPING becomes DONE on the
 first tick at or after the ramp time whose shaped force is exactly zero (at once if the stop
 came from ARMED, where no force was applied).
 
