@@ -259,6 +259,19 @@ def run_condition(
     )
 
 
+def excitation_safety(profile: Profile) -> Profile:
+    """``profile`` for a run whose command is an identification excitation: ``force_oscillation`` indicates.
+
+    The excitation commands force up to the top of its band (30 Hz by default, 2 kN) on purpose: it
+    is the run's controller, so the check of force above the controller's band has no band to stand
+    on, and would stop the sweep as it nears its top (docs/SAFETY.md, "Sustained oscillation"). Its
+    amplitude and rate are bounded before anything moves (``check_within_limits``), and every other
+    check stays as the profile says. The check still records what it sees (``indicate``).
+    """
+    force = dataclasses.replace(profile.safety.force, oscillation_action="indicate")
+    return dataclasses.replace(profile, safety=dataclasses.replace(profile.safety, force=force))
+
+
 def identify_actuator(
     profile: Profile,
     options: IdentifyOptions,
@@ -294,6 +307,7 @@ def identify_actuator(
     samples = excitation_signal(excitation, rate_hz)
     measured_rate_hz = None if options.in_lockstep else profile.can.status_rate_hz
     check_within_limits(excitation, samples, rate_hz, profile.safety.force, measured_rate_hz)
+    profile = excitation_safety(profile)
     out_dir = Path(options.out_dir)
     claim_result_folder(out_dir, RESULT_FILES, options.force)  # the fit then reads this run's responses only
     out_dir.mkdir(parents=True, exist_ok=True)

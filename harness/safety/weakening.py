@@ -54,6 +54,10 @@ DIRECTIONS: dict[str, Direction] = {
     "force.velocity_feedback_Ns_per_m": "larger",  # a larger claimed force deficit at speed hides more of a real one
     "force.tracking_action": "milder",
     "force.actuator_rating_N": "larger",  # None (no rating declared) is the weakest
+    "force.oscillation_corner_hz": "larger",  # a higher corner hides a limit cycle between the two
+    "force.oscillation_window_s": "larger",  # a longer window acts later
+    "force.oscillation_limit_N": "larger",
+    "force.oscillation_action": "milder",
     "sensors.max_sensor_age_s": "larger",
     "sensors.displacement_range_m": "larger",
     "sensors.velocity_range_m_s": "larger",
