@@ -80,3 +80,32 @@ def test_a_stop_during_the_imports_is_said_and_exits_4(tmp_path: Path) -> None:
     assert process.returncode == exit_codes.STOPPED, out + err
     assert "Traceback" not in err
     assert "outcome: stopped by the operator (Ctrl-C) before anything moved" in out
+
+
+def test_a_stop_pending_when_the_loop_starts_refuses_to_arm(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The loop takes over a request its safe points before did not see: it never arms, and ends stopped."""
+    import os
+
+    import numpy as np
+
+    import harness.runs.dry_run as dry_run
+    import harness.runs.session as session
+    from harness.cli import main
+    from harness.recording import load_run
+    from harness.safety.lifecycle import State
+
+    monkeypatch.setattr(session, "stop_if_requested", lambda where: None)  # only the loop is left to see it
+    on_link = dry_run.RigCoordinator.on_link
+
+    def ctrl_c_once_the_rig_answered(self, link) -> None:
+        on_link(self, link)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(dry_run.RigCoordinator, "on_link", ctrl_c_once_the_rig_answered)
+    status = main(["dry-run", "--lockstep", "--duration", "2", "--quiet", "--log-dir", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert status == exit_codes.STOPPED, out
+    assert "outcome: stopped" in out
+    (folder,) = [p for p in tmp_path.iterdir() if p.is_dir()]
+    states = load_run(folder)["state"].astype(int)
+    assert not np.isin(states, [int(State.ARMED), int(State.RUNNING)]).any(), "never armed"
