@@ -18,10 +18,10 @@ from harness.config import (
 EXIT_STATUS = """\
 exit status:
   0  completed            3  tripped safely (force zeroed, drive disabled), or
-  1  internal error (bug)     completed but the record was lost (repeat the test)
+  1  internal error (bug)     the record was lost: stopped safely (repeat the test)
   2  bad input or refused configuration, before anything moved
   4  stopped early (safe stop) by the operator, or by a check (e.g. the table
-     not playing the told record)
+     not playing the told record); by the operator before anything moved
 """
 
 #: Exit statuses of the offline commands (simulate, report, records): nothing moves, nothing trips.

@@ -137,6 +137,8 @@ def _fail_writes_after(monkeypatch, rows: int) -> None:
 def test_a_lost_record_stops_safely_and_the_final_zero_command_reaches_the_bus(tmp_path, monkeypatch, capsys) -> None:
     from drivers.codec import load_protocol
 
+    protocol = load_protocol()
+    command_id = protocol.messages["ACTUATOR_CMD"].frame_id
     _fail_writes_after(monkeypatch, 800)
     channel = f"full-disk-{id(tmp_path)}"
     listener = can.Bus(interface="virtual", channel=channel)
@@ -146,13 +148,13 @@ def test_a_lost_record_stops_safely_and_the_final_zero_command_reaches_the_bus(t
         out = _outcome(capsys.readouterr().out)
         commands = []
         while (message := listener.recv(0.0)) is not None:
-            if message.arbitration_id == load_protocol().messages["ACTUATOR_CMD"].frame_id:
+            if message.arbitration_id == command_id:
                 commands.append(message)
     finally:
         listener.shutdown()
     assert status == exit_codes.TRIPPED, out
     assert "outcome: stopped (record_lost), record lost" in out
-    database = load_protocol().database
+    database = protocol.database
     last = database.decode_message(commands[-1].arbitration_id, commands[-1].data)
     assert last["enable"] == 0 and last["force"] == 0, "the last command on the bus: drive off, zero force"
     enabled = [k for k, m in enumerate(commands) if database.decode_message(m.arbitration_id, m.data)["enable"]]
