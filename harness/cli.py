@@ -50,12 +50,22 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``harness`` console script."""
+    """Entry point of the ``harness`` console script.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments; None: the process's own (``main`` is then the process's entry, and the flag
+        handlers stay until it ends: a Ctrl-C in the interpreter's teardown, after the outcome line,
+        changes nothing and prints no traceback). Given (tests, a longer-lived process), the handlers
+        the process had are put back before ``main`` returns.
+    """
     signals = OperatorSignals().install()  # first of all: a Ctrl-C from here on is a flag, never lost
     try:
         code = _command(argv, signals)
     finally:
-        signals.restore()
+        if argv is not None:
+            signals.restore()
     if code == exit_codes.OK and signals.requested:  # came after the command's last look (its work was done)
         sys.stdout.write(f"stopped by the operator ({signals.what}) as the command ended; exit status 4\n")
         code = exit_codes.STOPPED
