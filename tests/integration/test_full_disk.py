@@ -195,3 +195,22 @@ def test_the_final_metadata_marks_the_outcome_in_place_when_no_new_file_fits(tmp
     assert meta["outcome"] == "stopped" and meta["trip_reason"] == "record_lost"
     assert "summary" not in meta, "the slim version: the outcome without the summary"
     assert "outcome written in place, without the summary" in folder.record_problem()
+
+
+def test_the_size_estimate_bounds_a_real_run_folder_without_being_absurd(tmp_path, capsys) -> None:
+    """The refusal's estimate (harness/recording/space.py) holds a real run's folder, within a factor of four."""
+    from harness.profile import load_profile
+    from harness.runs.dry_run import private_bus
+    from harness.runs.options import prepare_motion
+    from harness.runs.session import SessionSettings, expected_run_size
+
+    assert main(["dry-run", "--lockstep", "--duration", "3", "--quiet", "--log-dir", str(tmp_path)]) == exit_codes.OK
+    capsys.readouterr()
+    (folder,) = [p for p in tmp_path.iterdir() if p.is_dir()]
+    written = sum(path.stat().st_size for path in folder.iterdir())
+    profile = load_profile(REPO / "profiles" / "nceer_4dof.yaml")
+    motion = prepare_motion(profile)  # the default record: --duration 3 cuts it to 3 s
+    settings = SessionSettings(kind="dry-run", can=private_bus(profile.can_settings(None, None), False), duration_s=3.0,
+                               log_dir=tmp_path, lockstep=True, table_record=motion)
+    needed = expected_run_size(profile, settings).needed_bytes
+    assert written <= needed < 4 * written + (2 << 20), (written, needed)
