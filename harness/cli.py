@@ -92,8 +92,10 @@ def _command(argv: Sequence[str] | None, signals: OperatorSignals) -> int:
         signals.raise_interrupt = not getattr(args, "safe_points", False)  # nothing moves: Ctrl-C interrupts at once
         code = _handle(args, console)
         signals.raise_interrupt = False
-        if code == exit_codes.OK and signals.requested:  # a KeyboardInterrupt a library swallowed: still a stop
-            return _stopped(console, "interrupted by the operator while the command ran; exit status 4")
+        if code == exit_codes.OK and signals.requested:
+            if getattr(args, "safe_points", False):  # came after the loop: nothing was moving
+                return _stopped(console, f"stopped by the operator ({signals.what}) after the run had ended; exit status 4")
+            return _stopped(console, "interrupted by the operator while the command ran; exit status 4")  # swallowed
         return code
     except StoppedByOperator as stop:
         signals.raise_interrupt = False
