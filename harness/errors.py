@@ -23,7 +23,7 @@ from drivers.errors import BusError, BusLoadError, DriverError, ProtocolError
 
 __all__ = [
     "EXPECTED_ERRORS", "BusError", "BusLoadError", "DriverError", "HarnessError", "ModelError", "ProfileError",
-    "ProtocolError", "RecordError", "SafetyError",
+    "ProtocolError", "RecordError", "SafetyError", "StoppedByOperator",
 ]
 
 
@@ -70,3 +70,26 @@ class ModelError(HarnessError, ValueError):
 
 class SafetyError(HarnessError, RuntimeError):
     """An illegal lifecycle transition or a refused arm."""
+
+
+class StoppedByOperator(KeyboardInterrupt):
+    """The operator's Ctrl-C or SIGTERM, acted on at a safe point before the loop: nothing moved.
+
+    A KeyboardInterrupt, so every ``except Exception`` lets it through and every cleanup runs as
+    for Ctrl-C; the command line ends with exit status 4 and the outcome line
+    (:mod:`harness.loop.operator`).
+
+    Parameters
+    ----------
+    where : str
+        What the command was doing when it stopped, e.g. ``"while starting the virtual rig"``.
+    request : str
+        ``Ctrl-C``, ``a second Ctrl-C`` or ``SIGTERM``.
+    """
+
+    def __init__(self, where: str, request: str = "Ctrl-C"):
+        self.where = where
+        self.request = request
+        #: The run folder the stop was recorded in (marked ``stopped``), if one had been made.
+        self.run_path: str | None = None
+        super().__init__(f"stopped by the operator ({request}) before anything moved, {where}")

@@ -76,7 +76,7 @@ def add_parser(sub) -> None:
     output = parser.add_argument_group("output")
     output.add_argument("--log-dir", type=output_dir, metavar="DIR", help="where run folders go (default: logs/)")
     output.add_argument("--quiet", action="store_true", help="print the outcome line only (no live console, no tables)")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, safe_points=True)  # moves the rig: Ctrl-C is a flag (harness/cli.py)
 
 
 def run(args: argparse.Namespace, console: Console) -> int:

@@ -113,7 +113,7 @@ def add_parser(sub) -> None:
     rig.add_argument("--realtime", action="store_true", help="run the virtual rig in real time (default: lockstep)")
     rig.add_argument("--yes", action="store_true", help="on a real rig, do not ask before arming each condition")
     rig.add_argument("--quiet", action="store_true", help="print each condition's outcome line only (no live console)")
-    parser.set_defaults(handler=run)
+    parser.set_defaults(handler=run, safe_points=True)  # moves the rig: Ctrl-C is a flag (harness/cli.py)
 
 
 def _confirm(console: Console, can_text: str, excitation) -> Callable[[str], bool]:

@@ -11,18 +11,17 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
-from harness.config import (
-    input_limits as limits,  #: Exit statuses of the commands that move (or would move) a table: run, dry-run, rig.
-)
+from harness.config import input_limits as limits
 
+#: Exit statuses of the commands that move (or would move) a table: run, dry-run, rig.
 EXIT_STATUS = """\
 exit status:
   0  completed            3  tripped safely (force zeroed, drive disabled), or
-  1  internal error (bug)     completed but the record was lost (repeat the test)
+  1  internal error (bug)     the record was lost: stopped safely (repeat the test)
   2  bad input or refused configuration, before this command moved anything
      (a table an external rig already runs is refused, and said so)
   4  stopped early (safe stop) by the operator, or by a check (e.g. the table
-     not playing the told record)
+     not playing the told record); by the operator before anything moved
 """
 
 #: Exit statuses of the offline commands (simulate, report, records): nothing moves, nothing trips.

@@ -30,7 +30,10 @@ class CommandConsole(Console):
     """The console of a command: a rich Console whose questions are asked even under ``--quiet``."""
 
     def input(self, prompt: Any = "", **kwargs: Any) -> str:
-        with speaking(self):
+        """Ask, even under ``--quiet``; a Ctrl-C at the question stops the command before anything moves."""
+        from harness.loop.operator import interruptible
+
+        with speaking(self), interruptible("at the question before arming"):
             return super().input(prompt, **kwargs)
 
 
@@ -134,7 +137,7 @@ def print_outcome(console: Console, session, virtual_rig: bool = False, weakened
 
     style = {"completed": "green", "tripped": "bold red", "stopped": "yellow"}.get(session.outcome, "red")
     reason = f" ({escape(session.trip_reason)})" if session.trip_reason else ""
-    lost = f", [bold red]but the record is incomplete[/]: {escape(session.record_problem)}; repeat the test for its data" \
+    lost = f", [bold red]record lost[/]: {escape(session.record_problem)}; repeat the test for its data" \
         if session.record_problem else ""
     check = table_check(session.loop.table_record)  # the table against the record it was told (harness/safety/table_record.py)
     doubtful = ", [bold yellow]with a warning: the table check is marginal[/]" if check.verdict == "marginal" else ""

@@ -1,65 +1,75 @@
 """Operator requests through signals: Ctrl-C stops safely, a second Ctrl-C or SIGTERM trips.
 
-The handlers only set flags; the loop copies them into the tick's health record, and
-the supervisor acts on them in the next tick (ramp down and disable, or trip at once).
-The previous handlers are restored when the run ends.
+The handlers only set flags: no exception is ever raised inside whatever the process happens
+to run when the signal arrives (a compiler library's callback swallowed a KeyboardInterrupt
+raised there, and the test ran anyway: issue 30). The command line installs a set of them as
+the very first thing it does (:func:`harness.cli.main`; the class is
+:class:`harness.realtime.interrupts.OperatorSignals`); the phases before the loop look at
+it at safe points (:func:`stop_if_requested`, which ends the command "stopped by the operator
+before anything moved"); the loop installs its own set, which takes over a request already
+pending (a stop pending at arming refuses to arm), copies the flags into the tick's health
+record, and hands them back when the run ends, so a request made after the run counts too.
 """
 
 from __future__ import annotations
 
-import signal
-import threading
-from collections.abc import Callable
-from types import FrameType
-from typing import Any, TypeAlias
+from collections.abc import Iterator
+from contextlib import contextmanager
 
-#: What ``signal.signal`` takes and returns: a handler, ``SIG_DFL``/``SIG_IGN`` (ints), or None
-#: (a handler not installed from Python).
-SignalHandler: TypeAlias = Callable[[int, FrameType | None], Any] | int | None
+from harness.errors import StoppedByOperator
+from harness.realtime.interrupts import OperatorSignals, installed_signals
+
+__all__ = ["OperatorSignals", "installed_signals", "interruptible", "request_pending", "stop_if_requested"]
 
 
-class OperatorSignals:
-    """Installs SIGINT/SIGTERM handlers for the duration of a run (main thread only).
+def request_pending() -> bool:
+    """True if the installed :class:`OperatorSignals` holds an operator's request."""
+    signals = installed_signals()
+    return signals is not None and signals.requested
 
-    Attributes
+
+def stop_if_requested(where: str) -> None:
+    """A safe point before the loop: end the command if the operator asked to stop.
+
+    Parameters
     ----------
-    stop_requested : bool
-        First Ctrl-C: ramp the force down and disable the drive (safe stop).
-    trip_requested : bool
-        Second Ctrl-C or SIGTERM: trip (zero force, drive off, at once).
+    where : str
+        What the command was doing, e.g. ``"while starting the virtual rig"`` (for the outcome line).
+
+    Raises
+    ------
+    StoppedByOperator
+        When a Ctrl-C or SIGTERM is pending: nothing has moved yet; the caller's cleanup runs as
+        the exception passes, and the command line ends with exit status 4 and its outcome line.
     """
+    signals = installed_signals()
+    if signals is not None and signals.requested:
+        raise StoppedByOperator(where, signals.what)
 
-    def __init__(self) -> None:
-        self.stop_requested = False
-        self.trip_requested = False
-        self.interrupts = 0
-        self._previous: dict[int, SignalHandler] = {}
 
-    def _on_interrupt(self, signum: int, frame: FrameType | None) -> None:
-        self.interrupts += 1
-        if self.interrupts == 1:
-            self.stop_requested = True
-        else:
-            self.trip_requested = True
+@contextmanager
+def interruptible(where: str) -> Iterator[None]:
+    """A block that waits in pure Python (a question at the terminal): a Ctrl-C ends it at once.
 
-    def _on_terminate(self, signum: int, frame: FrameType | None) -> None:
-        self.trip_requested = True
+    Flags alone would leave ``input()`` waiting (it resumes after a handler that returns). A
+    request already pending ends the command before the block starts.
 
-    def install(self) -> OperatorSignals:
-        """Install the handlers if this is the main thread (otherwise signals stay as they are)."""
-        if threading.current_thread() is threading.main_thread():
-            self._previous[signal.SIGINT] = signal.signal(signal.SIGINT, self._on_interrupt)
-            self._previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, self._on_terminate)
-        return self
-
-    def restore(self) -> None:
-        """Put the previous handlers back."""
-        for signum, handler in self._previous.items():
-            signal.signal(signum, handler)
-        self._previous.clear()
-
-    def __enter__(self) -> OperatorSignals:
-        return self.install()
-
-    def __exit__(self, *exc) -> None:
-        self.restore()
+    Raises
+    ------
+    StoppedByOperator
+        On a Ctrl-C or SIGTERM pending before or received during the block.
+    """
+    signals = installed_signals()
+    if signals is None:
+        yield
+        return
+    stop_if_requested(where)
+    raising, signals.raise_interrupt = signals.raise_interrupt, True
+    try:
+        yield
+    except KeyboardInterrupt as err:
+        if isinstance(err, StoppedByOperator):
+            raise
+        raise StoppedByOperator(where, signals.what) from None
+    finally:
+        signals.raise_interrupt = raising

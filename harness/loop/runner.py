@@ -34,6 +34,8 @@ _FINAL = (State.DONE, State.TRIPPED)
 _OUTCOME_OF: dict[State, Outcome] = {State.DONE: "completed", State.TRIPPED: "tripped"}
 #: Longest wait for the table controller's RIG_STATUS ``table_running`` after RIG_CONTROL start (s).
 TABLE_START_TIMEOUT_S = 2.0
+#: The safe stop's reason when the recorder cannot write (docs/SAFETY.md, "A lost record").
+RECORD_LOST = "record_lost"
 
 
 class ArmTimeout(SafetyError):
@@ -103,8 +105,12 @@ class ControlLoop:
         sleep: Callable[[float], None] = time.sleep,
         table_running: Callable[[], bool] | None = None,
         scheduling: Scheduling | None = None,
+        recorder_error: Callable[[], BaseException | None] | None = None,
     ):
         self.tick = tick
+        #: ``recorder_error()``: the error that stopped the run folder's writer, or None (looked at every tick).
+        self.recorder_error = recorder_error
+        self._record_lost = False
         #: A SCHED_FIFO request the caller already made for this thread (None: :meth:`run` makes it, in
         #: real time only; a lockstep run keeps normal scheduling: it runs flat out and would hold a core).
         self.scheduling = scheduling
@@ -147,7 +153,7 @@ class ControlLoop:
         supervisor = self.tick.supervisor
         state = supervisor.state
         if state is State.IDLE:
-            if self.signals.stop_requested or self.signals.trip_requested:
+            if self.signals.stop_requested or self.signals.trip_requested or self._record_lost:
                 return run_started, armed_at, True
             try:
                 supervisor.arm(t, self.tick.health)
@@ -188,6 +194,22 @@ class ControlLoop:
                 "of RIG_CONTROL start (table.link: can)",
             )
         return started
+
+    def _check_recorder(self, t: float) -> None:
+        """A recorder that cannot write stops the run safely (``record_lost``), once; before arming, it never arms."""
+        assert self.recorder_error is not None, "called only with a recorder to watch"
+        error = self.recorder_error()
+        if error is None:
+            return
+        self._record_lost = True
+        supervisor = self.tick.supervisor
+        detail = (f"the recorder cannot write the run folder ({type(error).__name__}: {error}): the run is stopped "
+                  "safely, its record is incomplete")
+        supervisor.events.push(t, "fault", RECORD_LOST, detail)
+        if supervisor.state in (State.IDLE, State.ARMED, State.RUNNING):  # later, the ramp to zero is under way
+            if supervisor.state is not State.IDLE:
+                supervisor.stop(t, RECORD_LOST)
+            supervisor.stop_reason, supervisor.stop_detail = RECORD_LOST, detail
 
     def _wait(self, k: int) -> tuple[float, float]:
         """Wait for tick ``k``; return (t, lateness)."""
@@ -279,6 +301,8 @@ class ControlLoop:
                     health.record_time_s = t - run_started if run_started is not None and not self._awaiting_table else math.nan
                     command = tick.run(t, dt, t, lateness, stall_s, missed, self.lockstep is None)
                     timing.add(lateness, tick.compute_s, tick.cpu_s)
+                    if self.recorder_error is not None and not self._record_lost:
+                        self._check_recorder(t)
                     run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
                     self._update_status(t, run_started, duration_s, command, lateness)
                     self._gap_state = command.state  # the phase the next gap begins in

@@ -136,6 +136,33 @@ def write_json_atomic(path: Path, data: Mapping[str, Any]) -> None:
     _fsync_dir(path.parent)
 
 
+
+def write_json_in_place(path: Path, data: Mapping[str, Any]) -> bool:
+    """Overwrite ``path`` with ``data`` in the blocks it already holds, when they are enough (a full disk's last resort).
+
+    A disk too full for :func:`write_json_atomic`'s temporary file can still take a rewrite that
+    needs no new block. Nothing is written when the text would need more room than the file's
+    blocks (the file then keeps its previous content, rather than a half-written one).
+
+    Returns
+    -------
+    bool
+        True if written and flushed to the disk.
+    """
+    text = (strict_json.dumps(data, json_default, indent=2, sort_keys=False) + "\n").encode("utf-8")
+    try:
+        allocated = os.stat(path).st_blocks * 512
+        if len(text) > allocated:
+            return False
+        with open(path, "r+b") as handle:
+            handle.write(text)
+            handle.truncate()
+            handle.flush()
+            os.fsync(handle.fileno())
+    except OSError:
+        return False
+    return True
+
 def _fsync_dir(folder: Path) -> None:
     try:
         fd = os.open(folder, os.O_RDONLY)

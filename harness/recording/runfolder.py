@@ -15,8 +15,9 @@ a process that dies leaves it so, and everything flushed stays readable.
 :meth:`RunFolder.finish` also says whether the record is whole: ``"record_complete"`` is
 false when the writer failed (disk full, file-size limit) or a queue dropped anything, and
 ``metadata["recorder"]`` then counts what was lost (``lost``: rows, frames, events) and
-gives the error. The outcome stays what the run did (the rig is not tripped for a lost
-record); the command reports the loss (docs/SAFETY.md, "recorder").
+gives the error. The loop stops the run safely when the writer fails (``record_lost``); the
+command reports the loss and exits 3 (docs/SAFETY.md, "A lost record"). When even the final
+rewrite of ``metadata.json`` fails, the outcome is written in place, in the blocks the file holds.
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ from harness.recording.metadata import (
     safe_name,
     utc_now,
     write_json_atomic,
+    write_json_in_place,
     write_profile,
 )
 from harness.recording.writer import RunWriter
@@ -76,8 +78,10 @@ class RunFolder:
         self.metadata = metadata
         self._writer = writer
         self._finished = False
-        #: The error that kept :meth:`finish` from rewriting ``metadata.json``, if any.
+        #: The error that kept :meth:`finish` from rewriting ``metadata.json`` atomically, if any.
         self.metadata_error: OSError | None = None
+        #: What :meth:`finish` wrote in place of the atomic rewrite then ("" if nothing).
+        self.metadata_fallback = ""
 
     @classmethod
     def create(
@@ -131,18 +135,22 @@ class RunFolder:
         path = _unique_folder(Path(log_dir), f"{started:%Y-%m-%dT%H-%M-%S}_{safe_name(profile_name)}_{kind}")
         keep_can = (kind != "simulation") if with_can is None else with_can
         data = _initial_metadata(profile_name, kind, names, started, keep_can, metadata or {})
-        write_profile(path / PROFILE_FILE, resolved_profile_data)
-        write_json_atomic(path / METADATA_FILE, data)
-        writer = RunWriter(
-            path,
-            names,
-            signals_name=SIGNALS_FILE,
-            events_name=EVENTS_FILE,
-            can_name=CAN_FILE if keep_can else None,
-            row_capacity=row_capacity,
-            frame_capacity=frame_capacity,
-            flush_interval_s=flush_interval_s,
-        )
+        try:
+            write_profile(path / PROFILE_FILE, resolved_profile_data)
+            write_json_atomic(path / METADATA_FILE, data)
+            writer = RunWriter(
+                path,
+                names,
+                signals_name=SIGNALS_FILE,
+                events_name=EVENTS_FILE,
+                can_name=CAN_FILE if keep_can else None,
+                row_capacity=row_capacity,
+                frame_capacity=frame_capacity,
+                flush_interval_s=flush_interval_s,
+            )
+        except OSError as err:  # a disk that filled after the check of its room: refused, nothing armed
+            raise RunFolderError(f"cannot write the run folder ({type(err).__name__}: {err}), expected a disk with "
+                                 "room for the run's record", str(path)) from err
         return cls(path, names, data, writer)
 
     # ------------------------------------------------------------------ lifecycle
@@ -179,8 +187,23 @@ class RunFolder:
         self.metadata["record_complete"] = status["error"] is None and not any(status["lost"].values())
         try:
             write_json_atomic(self.path / METADATA_FILE, self.metadata)
-        except OSError as err:  # the disk that failed the writer may fail this too: the file keeps "incomplete"
+        except OSError as err:  # the disk that failed the writer may fail this too
             self.metadata_error = err
+            self.metadata_fallback = self._mark_in_place()
+
+    def _mark_in_place(self) -> str:
+        """After the atomic rewrite failed: at least mark the outcome, in the blocks metadata.json holds.
+
+        Returns what was written (for :meth:`record_problem`); "" if nothing could be: the file then
+        keeps ``"outcome": "incomplete"``.
+        """
+        path = self.path / METADATA_FILE
+        if write_json_in_place(path, self.metadata):
+            return "rewritten in place"
+        slim = {key: value for key, value in self.metadata.items() if key != "summary"}
+        if write_json_in_place(path, slim):
+            return "outcome written in place, without the summary"
+        return ""
 
     @property
     def record_complete(self) -> bool:
@@ -200,7 +223,9 @@ class RunFolder:
             cause = status["error"] or "the recorder's queues were full"
             texts.append(f"lost {', '.join(parts)} ({cause})")
         if self.metadata_error is not None:
-            texts.append(f"metadata.json not rewritten ({type(self.metadata_error).__name__}: {self.metadata_error})")
+            kept = self.metadata_fallback or "it still says incomplete"
+            texts.append(f"metadata.json not rewritten ({type(self.metadata_error).__name__}: {self.metadata_error}; "
+                         f"{kept})")
         return "; ".join(texts)
 
     def recorder_status(self) -> dict[str, Any]:

@@ -33,6 +33,7 @@ from drivers.reader import Sample
 from harness.canbus.config import CanConfig
 from harness.control.factory import make_controller
 from harness.errors import BusError
+from harness.loop.operator import stop_if_requested
 from harness.loop.table_link import CanTableLink
 from harness.loop.tick import ControlTick
 from harness.model.plant import Plant, TableMotion
@@ -43,10 +44,11 @@ from harness.paths import LOG_DIR
 from harness.profile import Profile
 from harness.recording import load_run
 from harness.recording.runfolder import check_log_dir
+from harness.recording.space import check_log_space
 from harness.rig.truth import truth_metadata, truth_summary
 from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 from harness.runs.run_context import write_dry_run_context
-from harness.runs.session import SessionResult, SessionSettings, run_session
+from harness.runs.session import SessionResult, SessionSettings, expected_run_size, run_session
 from harness.signals.peaks import Peaks, run_peaks
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 from harness.simulation.twin import run_rig_twin
@@ -175,6 +177,7 @@ class RigCoordinator:
         assert link is not None, "polled from on_link, once the link is open"
         deadline = time.monotonic() + timeout_s
         while not done():
+            stop_if_requested("while waiting for the virtual rig")
             process = self.process
             if process is not None and process.poll() is not None:
                 detail = process.stderr.read().decode(errors="replace").strip()[-2000:] if process.stderr else ""
@@ -410,6 +413,7 @@ def serving_virtual_rig(
 def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timing=None) -> DryRunResult:
     """Run a dry run; see the module docstring."""
     warm_up()  # compile the kernels now, never inside the loop or the rig
+    stop_if_requested("after loading the compiled kernels")
     profile = resolve_profile(profile, options.study)
     motion = prepare_motion(profile)
     rate_hz = profile.control.rate_hz
@@ -425,7 +429,9 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
         table_record=motion,  # the rig's table starts with RUNNING (RIG_CONTROL): record time is the table's
         reset_drive=options.reset_drive,
     )
-    check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
+    check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks both again)
+    check_log_space(settings.log_dir, expected_run_size(profile, settings))
+    stop_if_requested("before starting the virtual rig")
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:
         settings.peer_pids = coordinator.peer_pids
         session = run_session(
@@ -440,7 +446,9 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     span = record_span_s(session, motion)
     if options.compare:
         passive, twin = simulated_twins(profile, motion, rate_hz, profile.control.controller, options.lockstep, span)
-    write_dry_run_context(session.run_path, motion, passive, twin, span, options.lockstep)  # for `harness report`
+    session.write_after_run(  # for `harness report`
+        "target_motion.csv and the simulated references",
+        lambda: write_dry_run_context(session.run_path, motion, passive, twin, span, options.lockstep))
     return DryRunResult(session, profile, peaks, passive, twin, motion, span, truth_summary(differences), table_refused)
 
 

@@ -17,14 +17,29 @@ import json
 import sys
 
 from harness import exit_codes
-from harness.errors import EXPECTED_ERRORS
-from harness.profile import Profile
-from harness.realtime.interrupts import stop_on_signals
-from harness.runs.rig_service import serve_rig
+from harness.loop.operator import OperatorSignals
 
 
 def main() -> int:
-    """Serve the rig of the job on standard input; return an exit status."""
+    """Serve the rig of the job on standard input; return an exit status.
+
+    The dry run may stop this process while it still imports (its SIGINT): the handlers that
+    only set a flag come first, and the serve's own (:func:`stop_on_signals`) take the request
+    over, so a stop is never swallowed by a library's callback and the rig never serves on.
+    """
+    with OperatorSignals():
+        try:
+            return _serve()
+        except KeyboardInterrupt:
+            return exit_codes.STOPPED
+
+
+def _serve() -> int:
+    from harness.errors import EXPECTED_ERRORS
+    from harness.profile import Profile
+    from harness.realtime.interrupts import stop_on_signals
+    from harness.runs.rig_service import serve_rig
+
     job = json.loads(sys.stdin.read())
     profile = Profile.from_resolved(job["profile"])
     can_config = profile.can_settings(job["interface"], job["channel"])
@@ -35,8 +50,6 @@ def main() -> int:
     except EXPECTED_ERRORS as err:
         print(f"error: {err}", file=sys.stderr)
         return exit_codes.INPUT_ERROR
-    except KeyboardInterrupt:
-        return exit_codes.STOPPED
 
 
 if __name__ == "__main__":

@@ -24,7 +24,8 @@ from harness.control.compensation import NoCompensation
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig, make_compensator
-from harness.errors import ProfileError
+from harness.errors import ProfileError, StoppedByOperator
+from harness.loop.operator import stop_if_requested
 from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
 from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult
 from harness.loop.status import LoopStatus
@@ -36,6 +37,7 @@ from harness.realtime.host import Scheduling, request_fifo, restore_scheduling
 from harness.recording import RunFolder
 from harness.recording.layout import Outcome, RunKind
 from harness.recording.runfolder import check_log_dir
+from harness.recording.space import RunSize, check_log_space, run_size
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
 from harness.safety.table_record import NO_RECORD
@@ -102,12 +104,56 @@ class SessionResult:
     def exit_code(self) -> int:
         """The command's exit status for this outcome.
 
-        A run that completed but lost its record exits 3 like a trip: the table moved, the
-        rig is safe, and the test must be repeated to get its data (docs/SAFETY.md, "recorder").
+        A run that lost any of its record exits 3 like a trip, whether it completed, was stopped
+        by its own safe stop (``record_lost``) or by the operator: the table moved, the rig is
+        safe, and the test must be repeated to get its data (docs/SAFETY.md, "A lost record").
         """
-        if self.outcome == "completed" and not self.record_complete:
+        if not self.record_complete and self.outcome in OUTCOME_EXIT:
             return exit_codes.TRIPPED
         return OUTCOME_EXIT.get(self.outcome, exit_codes.INTERNAL_ERROR)
+
+    def write_after_run(self, what: str, write: Callable[[], object]) -> bool:
+        """Every write into the run folder after the loop goes through here: a disk error is a lost record.
+
+        Parameters
+        ----------
+        what : str
+            What ``write`` writes, for the outcome line (e.g. ``"target_motion.csv and the references"``).
+        write : callable
+            Writes it; an ``OSError`` (disk full, file-size limit, a folder gone) is caught.
+
+        Returns
+        -------
+        bool
+            True if written; False if not: the record is then incomplete (exit status 3, said on the
+            outcome line), never a traceback.
+        """
+        try:
+            write()
+        except OSError as err:
+            lost = f"{what} not written ({type(err).__name__}: {err})"
+            self.record_problem = f"{self.record_problem}; {lost}" if self.record_problem else lost
+            return False
+        return True
+
+
+def expected_run_size(profile: Profile, settings: SessionSettings) -> RunSize:
+    """The most a session's run folder holds (:mod:`harness.recording.space`), from its rates and its length."""
+    from harness.canbus.link import prepare
+
+    protocol, _ = prepare(settings.can)  # the DBC, read without touching the bus
+    rates = settings.can.rates_hz()
+    if settings.lockstep:  # the rig answers every step with RIG_STATUS
+        rates["RIG_STATUS"] = max(rates.get("RIG_STATUS", 0.0), profile.control.rate_hz)
+    frames_per_s = sum(rates.values())
+    data_bytes = sum(rate * protocol.messages[name].length for name, rate in rates.items() if name in protocol.messages)
+    loop = profile.loop
+    span_s = loop.arm_timeout_s + loop.settle_s + settings.duration_s + loop.tail_s + loop.after_s
+    record = settings.table_record
+    return run_size(
+        len(CONTROL_ROW), profile.control.rate_hz, span_s, frames_per_s, data_bytes / frames_per_s if frames_per_s else 0.0,
+        settings.can.channel, record_values=4 * len(record.t_s) if record is not None else 0,
+    )
 
 
 def bus_statistics(link) -> dict:
@@ -274,6 +320,8 @@ def run_session(
     if table_link is not None:
         on_start, stop_table = table_link.start, table_link.stop
     check_log_dir(settings.log_dir)  # before the bus opens: an unwritable log directory is bad input, nothing started
+    check_log_space(settings.log_dir, expected_run_size(profile, settings))  # and one too full to hold the record
+    stop_if_requested("before opening the bus")
     scheduling: Scheduling | None = None
     link = open_harness(settings.can, settings.peer_pids)
     folder = None
@@ -282,6 +330,8 @@ def run_session(
             settings.log_dir, profile.name, settings.kind, profile.resolved_data(), CONTROL_ROW,
             metadata=_metadata(profile, settings),
         ).start()
+        recording = folder
+        stop_if_requested("after creating the run folder")
         heartbeat_every = max(1, round(profile.control.rate_hz / settings.can.heartbeat_rate_hz))
         estop_every = max(1, round(profile.control.rate_hz / settings.can.estop_rate_hz))
         tick = ControlTick(link, controller, estimator, supervisor, folder, heartbeat_every, estop_every, stop_table,
@@ -293,8 +343,10 @@ def run_session(
             table_link.attach(link)
         if on_link is not None:
             on_link(link)
+            stop_if_requested("after the rig answered")
         if settings.reset_drive:
             _reset_drive(link, folder, console)
+            stop_if_requested("after the drive's reset")
         if not settings.lockstep:  # before the pre-flight check, so that it measures the scheduling the run gets
             scheduling = request_fifo(profile.loop.realtime.fifo_priority)
         host_timing = None if settings.lockstep else _check_host_timing(
@@ -303,7 +355,8 @@ def run_session(
         status = LoopStatus()
         tick.attach_status(status)  # stories, fault code and event lines for the live console
         loop = ControlLoop(tick, profile.loop, profile.control.rate_hz, settings.duration_s, lockstep, on_start, status,
-                           table_running=table_link.running if table_link is not None else None, scheduling=scheduling)
+                           table_running=table_link.running if table_link is not None else None, scheduling=scheduling,
+                           recorder_error=lambda: recording.writer_error)
         controller_name = settings.metadata.get("controller", profile.control.controller)  # an excitation names itself
         title = f"{profile.name}: {settings.kind}, {controller_name} at {profile.control.rate_hz:g} Hz"
         title += " (lockstep)" if lockstep else ""
@@ -332,6 +385,12 @@ def run_session(
                                "record_start_t_s": result.record_start_t_s, "table_record": result.table_record,
                                "host_timing": host_timing.as_dict() if host_timing else None})
         return SessionResult(result.outcome, result.trip_reason, folder.path, result, bus, folder.record_problem())
+    except StoppedByOperator as stop:  # at a safe point before the loop: nothing moved
+        if folder is not None:
+            folder.record_event(None, "lifecycle", "operator_stop", str(stop))
+            folder.finish("stopped", trip_reason=f"operator stop before arming, {stop.where}")
+            stop.run_path = str(folder.path)
+        raise
     except BaseException:
         if folder is not None:
             folder.finish("error")  # idempotent: keeps an outcome already written

@@ -28,7 +28,7 @@ def _limit_file_size() -> None:
     resource.setrlimit(resource.RLIMIT_FSIZE, (FILE_SIZE_LIMIT, FILE_SIZE_LIMIT))
 
 
-def test_a_file_size_limit_during_a_dry_run_is_reported_and_exits_3(tmp_path: Path) -> None:
+def test_a_file_size_limit_during_a_dry_run_stops_it_safely_is_reported_and_exits_3(tmp_path: Path) -> None:
     done = subprocess.run(
         [sys.executable, "-m", "harness.cli", "dry-run", "--lockstep", "--duration", "2", "--quiet",
          "--log-dir", str(tmp_path)],
@@ -37,12 +37,12 @@ def test_a_file_size_limit_during_a_dry_run_is_reported_and_exits_3(tmp_path: Pa
     out = " ".join((done.stdout + done.stderr).split())  # rich wraps long lines
     assert "Traceback" not in out
     assert done.returncode == exit_codes.TRIPPED, out
-    assert "outcome: completed, but the record is incomplete: lost" in out
+    assert "outcome: stopped (record_lost), record lost: lost" in out  # a safe stop (docs/SAFETY.md, "A lost record")
     assert "File too large" in out and "repeat the test" in out
     (folder,) = [p for p in tmp_path.iterdir() if p.is_dir()]
     meta = json.loads((folder / "metadata.json").read_text())
     recorder = meta["recorder"]
-    assert meta["outcome"] == "completed" and meta["record_complete"] is False
+    assert meta["outcome"] == "stopped" and meta["trip_reason"] == "record_lost" and meta["record_complete"] is False
     assert "[Errno 27] File too large" in recorder["error"]
     assert recorder["lost"]["rows"] > 0 and recorder["lost"]["frames"] > 0
     # every tick handed the recorder one row: each is either confirmed written or counted lost
@@ -52,7 +52,7 @@ def test_a_file_size_limit_during_a_dry_run_is_reported_and_exits_3(tmp_path: Pa
 
 
 def test_exit_status_of_a_lost_record() -> None:
-    """A lost record turns "completed" (0) into 3; a trip stays 3 and an operator stop stays 4."""
+    """A lost record turns "completed" (0) and a stop (4) into 3; a trip stays 3."""
 
     def status(outcome: str, problem: str) -> int:
         return SessionResult(outcome, "", Path("."), None, record_problem=problem).exit_code
@@ -61,4 +61,5 @@ def test_exit_status_of_a_lost_record() -> None:
     assert status("completed", "") == exit_codes.OK
     assert status("completed", lost) == exit_codes.TRIPPED
     assert status("tripped", lost) == exit_codes.TRIPPED
-    assert status("stopped", lost) == exit_codes.STOPPED
+    assert status("stopped", lost) == exit_codes.TRIPPED
+    assert status("stopped", "") == exit_codes.STOPPED

@@ -380,7 +380,9 @@ def test_metadata_that_cannot_be_rewritten_leaves_the_run_incomplete_not_a_crash
 
     folder.start()
     monkeypatch.setattr(runfolder_module, "write_json_atomic", disk_full)
+    monkeypatch.setattr(runfolder_module, "write_json_in_place", lambda path, data: False)  # not even in place
     folder.finish("completed")
     assert not folder.record_complete
     assert "metadata.json not rewritten" in folder.record_problem()
-    assert load_run(folder.path).incomplete  # the file keeps the outcome written at the start
+    assert "it still says incomplete" in folder.record_problem()
+    assert load_run(folder.path).incomplete  # the file keeps the outcome written at the start, whole

@@ -1,0 +1,120 @@
+"""An operator's stop is never lost, at any moment from start to exit (issue 30, item 1).
+
+The review: ``harness dry-run --lockstep --duration 20 --quiet`` sent SIGINT 1.5 s after its start
+printed ``Exception ignored on calling ctypes callback function ... KeyboardInterrupt`` (numba's
+cache callback swallowed it) and then ran the whole test, ``outcome: completed``, exit 0; other
+tries ended in a traceback (exit 130). Here a real ``harness`` process gets SIGINT (and some
+SIGTERM) at a series of moments spread over its whole life, up to just before its outcome line
+(after it, the interpreter's teardown puts Python's default handlers back): while
+importing, while loading the compiled kernels, while the rig process starts, at arming, in the
+loop, while comparing with the twins, while printing. Every one must end with exit status 4 (3 for a trip), an outcome line, its
+run folder (if one was made) marked, and no traceback.
+
+The interpreter's own start-up, before the first line of the project runs, is outside the
+project's reach: the series starts once ``harness.cli`` can have installed its handlers (measured).
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from harness import exit_codes
+from tests.conftest import REPO
+
+#: Moments of the series (the sweep's points); each stopped run is shorter than a whole one, so the
+#: series costs about half of POINTS whole runs (a whole lockstep dry run of 1 s is about 5 s here).
+POINTS = 10
+
+
+def _command(log_dir: Path) -> list[str]:
+    return [sys.executable, "-m", "harness.cli", "dry-run", "--lockstep", "--duration", "1", "--quiet",
+            "--log-dir", str(log_dir)]
+
+
+def _handlers_installed_after_s() -> float:
+    """Wall time (s) for a fresh interpreter to import what ``harness.cli`` imports before it installs its handlers."""
+    started = time.monotonic()
+    subprocess.run([sys.executable, "-c", "import harness.cli"], cwd=REPO, check=True, timeout=60)
+    return time.monotonic() - started
+
+
+def _whole_run_s(log_dir: Path) -> float:
+    """Wall time (s) from the start of an uninterrupted run to its outcome line (the command's last output)."""
+    started = time.monotonic()
+    process = subprocess.Popen(_command(log_dir), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO)
+    assert process.stdout is not None
+    line = process.stdout.readline()
+    whole_s = time.monotonic() - started
+    out, err = process.communicate(timeout=300)
+    assert process.returncode == exit_codes.OK and line.startswith("outcome: completed"), line + out + err
+    return whole_s
+
+
+def test_a_stop_at_any_moment_from_start_to_exit_ends_safely_with_an_outcome_line(tmp_path: Path) -> None:
+    whole_s = _whole_run_s(tmp_path / "whole")
+    first_s = _handlers_installed_after_s()
+    step_s = (0.95 * whole_s - first_s) / (POINTS - 1)  # the last just before the outcome line (docs/SAFETY.md)
+    for k in range(POINTS):
+        delay_s = first_s + k * step_s
+        signum = signal.SIGTERM if k % 4 == 3 else signal.SIGINT
+        log_dir = tmp_path / f"try{k}"
+        process = subprocess.Popen(_command(log_dir), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                   cwd=REPO)
+        time.sleep(delay_s)
+        exited = process.poll() is not None  # (a loaded machine may have run it faster than the measured one)
+        process.send_signal(signum)
+        out, err = process.communicate(timeout=300)
+        said = f"{signal.Signals(signum).name} after {delay_s:.2f} s (outcome of a whole run at {whole_s:.2f} s):\n{out}{err}"
+        assert "Traceback" not in out + err and "Exception ignored" not in out + err, said
+        if exited:
+            continue  # the signal came after the process ended: nothing to stop
+        assert process.returncode in (exit_codes.STOPPED, exit_codes.TRIPPED), said
+        assert "outcome:" in out, said
+        for folder in log_dir.glob("*/") if log_dir.is_dir() else ():
+            meta = json.loads((folder / "metadata.json").read_text())
+            assert meta["outcome"] in ("stopped", "tripped", "completed"), said
+
+
+def test_a_stop_during_the_imports_is_said_and_exits_4(tmp_path: Path) -> None:
+    """The review's message: Ctrl-C during the imports gave exit 130 and a traceback."""
+    process = subprocess.Popen(_command(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO)
+    time.sleep(_handlers_installed_after_s())  # the handlers are in; the commands' imports take a second more
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode == exit_codes.STOPPED, out + err
+    assert "Traceback" not in err
+    assert "outcome: stopped by the operator (Ctrl-C) before anything moved" in out
+
+
+def test_a_stop_pending_when_the_loop_starts_refuses_to_arm(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The loop takes over a request its safe points before did not see: it never arms, and ends stopped."""
+    import os
+
+    import numpy as np
+
+    import harness.runs.dry_run as dry_run
+    import harness.runs.session as session
+    from harness.cli import main
+    from harness.recording import load_run
+    from harness.safety.lifecycle import State
+
+    monkeypatch.setattr(session, "stop_if_requested", lambda where: None)  # only the loop is left to see it
+    on_link = dry_run.RigCoordinator.on_link
+
+    def ctrl_c_once_the_rig_answered(self, link) -> None:
+        on_link(self, link)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(dry_run.RigCoordinator, "on_link", ctrl_c_once_the_rig_answered)
+    status = main(["dry-run", "--lockstep", "--duration", "2", "--quiet", "--log-dir", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert status == exit_codes.STOPPED, out
+    assert "outcome: stopped" in out
+    (folder,) = [p for p in tmp_path.iterdir() if p.is_dir()]
+    states = load_run(folder)["state"].astype(int)
+    assert not np.isin(states, [int(State.ARMED), int(State.RUNNING)]).any(), "never armed"
