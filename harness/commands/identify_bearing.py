@@ -27,7 +27,7 @@ against fitted).
 
 
 def add_parser(sub) -> None:
-    from harness.identification.friction_fit import LOWPASS_HZ
+    from harness.identification.choices import LOWPASS_HZ
 
     parser = sub.add_parser(
         "bearing",

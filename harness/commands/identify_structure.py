@@ -24,7 +24,7 @@ the base mat's acceleration: measured, the story model and the modal fit).
 
 
 def add_parser(sub) -> None:
-    from harness.identification.story_fit import DAMPING_MODELS
+    from harness.identification.choices import DAMPING_MODELS
 
     parser = sub.add_parser(
         "structure",

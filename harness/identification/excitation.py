@@ -26,11 +26,10 @@ from dataclasses import asdict, dataclass
 from typing import ClassVar, Literal
 
 import numpy as np
-from scipy.signal import chirp
 
 from drivers.measurements import Measurements
 from harness.errors import HarnessError
-from harness.identification.frf import MIN_BAND_BINS
+from harness.identification.choices import MIN_BAND_BINS
 from harness.safety.config import ForceConfig
 
 SignalKind = Literal["chirp", "random"]
@@ -161,6 +160,8 @@ def excitation_signal(excitation: Excitation, rate_hz: float) -> np.ndarray:
     n = int(round(excitation.duration_s * rate_hz)) + 1
     t = np.arange(n) / rate_hz
     if excitation.signal == "chirp":
+        from scipy.signal import chirp  # here, not at the top: the command line's parser imports this module
+
         shape = chirp(t, excitation.low_hz, excitation.duration_s, excitation.high_hz, method="logarithmic", phi=-90.0)
     else:
         shape = _band_limited_noise(n, rate_hz, excitation.band_hz, excitation.seed)
@@ -233,7 +234,7 @@ def check_within_limits(
 
 
 def check_band_bins(excitation: Excitation, segment: int, rate_hz: float) -> None:
-    """Refuse a band that holds fewer than :data:`~harness.identification.frf.MIN_BAND_BINS` frequencies of the estimate.
+    """Refuse a band that holds fewer than :data:`~harness.identification.choices.MIN_BAND_BINS` frequencies of the estimate.
 
     The estimate has a frequency every ``rate_hz / segment`` Hz (the Welch segment's bins);
     a band between two of them would be excited and then give nothing to fit or plot.

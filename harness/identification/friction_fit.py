@@ -49,13 +49,12 @@ import numba
 import numpy as np
 from scipy import optimize, signal
 
+from harness.identification.choices import LOWPASS_HZ
 from harness.identification.fit_statistics import correlation_time, covariance, relative_error
 from harness.model.bearing import A_MU, MU_DELTA, MU_MAX, YIELD, BearingConfig, advance_hysteretic
 
 #: The fitted parameters, as the profile's ``bearing`` section names them.
 PARAMETERS = ("mu_max", "mu_delta", "a_mu_s_per_m", "yield_displacement_m")
-#: Corner of the low-pass applied to the measured and the fitted force alike (Hz).
-LOWPASS_HZ = 30.0
 #: Crossover of the complementary filter: below it the displacement sensors, above it the velocity ones (Hz).
 CROSSOVER_HZ = 2.0
 #: A run slid when its sliding speed exceeded this (m/s): 25 times the rig's velocity noise.

@@ -26,18 +26,15 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from scipy import optimize
 
 from harness.identification import lti
+from harness.identification.choices import DampingModel
 from harness.identification.fit_statistics import correlation_time, covariance
 from harness.identification.structure_records import StructureRecord
 from harness.model.building import BuildingConfig, fixed_base_modes
-
-DampingModel = Literal["per_story", "proportional"]
-DAMPING_MODELS: tuple[DampingModel, ...] = ("per_story", "proportional")
 
 
 @dataclass(frozen=True)

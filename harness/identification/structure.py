@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.identification.choices import MIN_BAND_BINS
 from harness.identification.fit_statistics import relative_error
-from harness.identification.frf import MIN_BAND_BINS
 from harness.identification.modal_fit import ModalFit, fit_modes, modal_response
 from harness.identification.outputs import (
     OVERLAY_FILE,
@@ -128,7 +128,7 @@ def structure_record(run: RunData, n_stories: int, band_hz: tuple[float, float] 
 
 
 def check_band_bins(measured: MeasuredResponse, band_hz: tuple[float, float], given: bool) -> None:
-    """Refuse a band holding fewer than :data:`~harness.identification.frf.MIN_BAND_BINS` frequencies of the measured response.
+    """Refuse a band holding fewer than :data:`~harness.identification.choices.MIN_BAND_BINS` frequencies of the measured response.
 
     The response has a frequency every ``1 / segment`` Hz, and a segment is at most a quarter
     of the shortest run (:func:`~harness.identification.structure_records.frf_estimate`).
