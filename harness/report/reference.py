@@ -24,7 +24,7 @@ from harness.motions.tracking import Tracking, tracking
 from harness.recording.reader import RunData
 from harness.report.peak_table import PeakTable
 from harness.report.table_check import run_table_check
-from harness.report.tables import peaks_comparison_table, peaks_pair_table
+from harness.report.tables import peaks_comparison_table, peaks_pair_table, window_note
 from harness.report.text_table import TextTable
 from harness.signals.peaks import Peaks, run_peaks
 
@@ -70,7 +70,7 @@ def reference_tables(runs: Sequence[RunData]) -> list[PeakTable]:
             continue
         measured = run_peaks(run)
         passive, twin = _peaks(reference.get("passive_peaks")), _peaks(reference.get("twin_peaks"))
-        note = _span_note(reference)
+        note = _span_note(reference) + window_note((run,)) + " "
         check = run_table_check(run.metadata)  # a table that did not play the told record: no reductions
         if passive is not None:
             tables.append(peaks_pair_table(
