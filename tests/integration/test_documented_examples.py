@@ -364,3 +364,25 @@ def test_every_set_the_docs_mention_is_accepted_on_the_default_profile() -> None
             except Exception as refused:
                 raise AssertionError(f"{where}: --set {override} is refused: {refused}") from refused
     assert found >= 5
+
+
+#: Options whose value is a file or folder the example writes.
+OUTPUT_OPTIONS = ("--out", "--report", "--json")
+
+
+def test_what_the_examples_write_in_the_checkout_is_ignored_by_git() -> None:
+    """Run from the checkout, as the README's are, an example's results must not show up as changes to commit."""
+    import shutil
+    import subprocess
+
+    if shutil.which("git") is None or not (REPO / ".git").exists():
+        pytest.skip("not a git checkout")
+    written = sorted({example.argv[i + 1] for block in BLOCKS for example in block.examples
+                      for i, word in enumerate(example.argv[:-1]) if word in OUTPUT_OPTIONS and example.argv[i + 1] != "-"})
+    assert {"frf/", "ident/bearing", "ident/structure", "study/"} <= set(written)
+    paths = [f"{path.rstrip('/')}/identified.yaml" if not path.endswith(".json") else path for path in written
+             if not Path(path).is_absolute() and not path.startswith(("..", "<"))]
+    found = subprocess.run(["git", "check-ignore", "--no-index", *paths], cwd=REPO, capture_output=True, text=True)
+    ignored = set(found.stdout.split())
+    assert not [path for path in paths if path not in ignored], "not git-ignored: " + ", ".join(
+        path for path in paths if path not in ignored)

@@ -9,6 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from harness.console.live import record_time_text, run_title
 from harness.recording.reader import RunData
 from harness.report import plots_response
 from harness.report.labels import distinct_labels
@@ -63,3 +64,58 @@ def test_a_single_dry_run_drift_plot_overlays_its_passive_reference(tmp_path: Pa
     passive_lines = [line for line in drawn["lines"] if str(line.get_label()).startswith("passive (sim.)")]
     assert len(passive_lines) == 1
     assert np.max(np.abs(passive_lines[0].get_ydata())) == pytest.approx(3.0, rel=1e-3)  # mm
+
+
+def test_the_identify_console_titles_an_identification_not_a_dry_run() -> None:
+    metadata = {"controller": "excitation (chirp)", "identification": {"kind": "actuator", "condition": "blocked"}}
+    title = run_title("nceer_4dof", "dry-run", metadata, "excitation (chirp)", 500.0, True)
+    assert "dry-run" not in title
+    assert title == "nceer_4dof: identify actuator (blocked) on the virtual rig, excitation (chirp) at 500 Hz (lockstep)"
+    assert run_title("nceer_4dof", "dry-run", {}, "phi", 500.0, False) == "nceer_4dof: dry-run, phi at 500 Hz"
+
+
+def test_the_console_never_shows_record_time_past_the_record() -> None:
+    assert record_time_text(41.6, 40.0).startswith("  40.0 / 40.0 s  (100.0 %), then 1.6 s after it")  # was 41.6 / 40.0
+    assert record_time_text(12.0, 30.0) == "  12.0 / 30.0 s  ( 40.0 %)"
+
+
+def test_white_noise_under_a_time_scale_says_it_plays_its_band_not_compressed() -> None:
+    from harness.motions.config import RecordConfig, load_raw_and_motion
+
+    _, motion = load_raw_and_motion(RecordConfig(), base_dir=".", name="white_noise:0.5-5", time_scale=2.0, duration_s=10.0,
+                                    env={})
+    assert not any("compressed by" in note for note in motion.notes), motion.notes
+    assert any("still plays 0.5-5 Hz" in note for note in motion.notes)
+    _, record = load_raw_and_motion(RecordConfig(), base_dir=".", name="synthetic", time_scale=2.0, duration_s=10.0, env={})
+    assert any(note.startswith("time compressed by 2") for note in record.notes)  # a real record's time is compressed
+
+
+def test_harness_rig_says_why_it_stopped_on_ctrl_c() -> None:
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    from harness import exit_codes
+    from harness.commands.rig import SERVING
+    from tests.conftest import REPO
+
+    channel = f"rig-ctrl-c-{os.getpid()}"
+    rig = subprocess.Popen(
+        [sys.executable, "-m", "harness.cli", "rig", "--lockstep", "--interface", "seqpacket", "--channel", channel,
+         "--record", "synthetic", "--duration", "2", "--parent-pid", str(os.getpid())],
+        cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )
+    try:
+        assert rig.stdout is not None
+        for line in rig.stdout:  # Ctrl-C while it serves (before, the command's own "interrupted" says it)
+            if SERVING in line:
+                break
+        rig.send_signal(signal.SIGINT)
+        rest = rig.communicate(timeout=60)[0]
+    finally:
+        if rig.poll() is None:
+            rig.kill()
+            rig.wait()
+    assert rig.returncode == exit_codes.STOPPED
+    assert "virtual rig stopped by the operator (Ctrl-C): drive disabled, bus closed (exit status 4)" in rest, rest
