@@ -37,3 +37,19 @@ def test_enough_graded_cases_give_a_meaningful_fit(tmp_path: Path) -> None:
     assert curve.meaningful and curve.note == ""
     weak = fragility("OF-I", *_cases(2, lambda level, _: 0.1 if level >= 0.3 else 0.05), limit=0.075)
     assert plot_fragility([("stroke", [curve, weak])], tmp_path / "fragility.png", "study").is_file()
+
+
+def test_the_sweep_report_warns_on_the_console_of_a_fit_that_is_not_meaningful(tmp_path: Path) -> None:
+    from harness.commands.sweep import _fragility_warnings
+    from harness.sweep.report import ReportSettings, write_fragility
+    from harness.sweep.summary import design_labels
+
+    pga, sliding = _cases(2, lambda level, _: 0.1 if level >= 0.3 else 0.05)  # 2 records a level, a step
+    n = pga.size
+    columns = {"pga_g": pga, "outcome": np.array(["ok"] * n, dtype=object), "controller": np.array(["FSF-I"] * n, dtype=object),
+               "record": np.array(["el_centro", "hachinohe"] * (n // 2), dtype=object),
+               "passive.sliding_displacement_m": sliding * 0.8, "passive.max_drift_m": np.full(n, 0.01),
+               "passive.max_floor_acceleration_m_s2": np.full(n, 5.0), "controlled.sliding_displacement_m": sliding}
+    files = write_fragility(columns, design_labels(columns, []), ReportSettings("study", [], 0.075), tmp_path)
+    warnings = _fragility_warnings(files)
+    assert any(line.startswith(f"fragility of sliding_displacement_m, FSF-I: {NOT_MEANINGFUL}") for line in warnings), warnings
