@@ -84,6 +84,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import DryRunOptions, dry_run
     from harness.runs.options import resolve_profile
+    from harness.signals.peaks import ComparisonWindow
 
     if args.reset_drive and not args.external_rig:
         command_console(stderr=True).print(  # an error: on standard error, and never silenced by --quiet
@@ -112,7 +113,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     )
     for warning in motion.warnings:
         console.print(f"  [bold yellow]warning:[/] {escape(warning)}", highlight=False)
-    title = "peak responses: simulated passive reference and the dry run"
+    title = f"peak responses: simulated passive reference and the dry run, {ComparisonWindow(0.0, motion.duration_s).describe()}"
     if result.span_s is not None:
         title += f", over the {result.span_s:.2f} s of record that ran before the run ended ({session.outcome})"
     assert result.passive is not None, "the command's dry run is compared (DryRunOptions.compare)"

@@ -110,7 +110,7 @@ def non_empty(text: str) -> str:
     return text
 
 
-def shipped_file(text: str, folder: Path) -> Path | None:
+def shipped_file(text: str, folder: Path, *, existing_wins: bool = True) -> Path | None:
     """The shipped YAML file in ``folder`` that ``text`` names, if it names one and is not an existing file itself.
 
     A name may carry ``.yaml`` and the trailing folders of ``folder`` inside the checkout:
@@ -126,6 +126,9 @@ def shipped_file(text: str, folder: Path) -> Path | None:
         What the user typed.
     folder : Path
         A folder of the checkout (:data:`harness.paths.PROFILE_DIR`, :data:`harness.paths.STUDY_DIR`).
+    existing_wins : bool
+        Whether a ``text`` that is an existing file from the working directory is left alone (the
+        command line); a study file, whose paths are relative to itself, says False.
 
     Returns
     -------
@@ -137,7 +140,7 @@ def shipped_file(text: str, folder: Path) -> Path | None:
     given = Path(text).expanduser()
     inside = folder.relative_to(PROJECT_ROOT).parts
     prefixes = {inside[len(inside) - n:] for n in range(len(inside) + 1)}  # (), ("studies",), ("profiles", "studies")
-    if given.is_file() or given.parts[:-1] not in prefixes:
+    if (existing_wins and given.is_file()) or given.parts[:-1] not in prefixes:
         return None
     for candidate in (folder / given.name, folder / f"{given.name}.yaml"):
         if candidate.suffix in (".yaml", ".yml") and candidate.is_file():
@@ -145,11 +148,11 @@ def shipped_file(text: str, folder: Path) -> Path | None:
     return None
 
 
-def shipped_profile(text: str) -> Path | None:
+def shipped_profile(text: str, *, existing_wins: bool = True) -> Path | None:
     """The shipped profile ``text`` names (:func:`shipped_file` in :data:`harness.paths.PROFILE_DIR`)."""
     from harness.paths import PROFILE_DIR
 
-    return shipped_file(text, PROFILE_DIR)
+    return shipped_file(text, PROFILE_DIR, existing_wins=existing_wins)
 
 
 def study_path(text: str) -> str:

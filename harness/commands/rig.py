@@ -78,8 +78,21 @@ def run(args: argparse.Namespace, console: Console) -> int:
         truth_note = truth_summary(profile.rig_truth().differences)
         if truth_note:
             console.print(f"[yellow]{escape(truth_note)}[/]", highlight=False)
-        return serve_rig(profile, can_config, lockstep=args.lockstep, seed=args.seed, parent_pid=args.parent_pid,
-                         on_journal=lambda wall_time_s, line: print_journal_line(console, wall_time_s, line))
+        status = serve_rig(profile, can_config, lockstep=args.lockstep, seed=args.seed, parent_pid=args.parent_pid,
+                           on_journal=lambda wall_time_s, line: print_journal_line(console, wall_time_s, line),
+                           on_ready=lambda rig: console.print(SERVING, highlight=False))
+        console.print(stopped_line(status), highlight=False, soft_wrap=True)
+        return status
+
+
+#: Printed once the rig serves the bus (a harness may connect from then on).
+SERVING = "virtual rig serving: waiting for a harness"
+
+
+def stopped_line(status: int) -> str:
+    """The rig's last line: why it stopped serving and its exit status (a stop is never silent)."""
+    why = "stopped by the operator (Ctrl-C)" if status == exit_codes.STOPPED else "stopped serving"
+    return f"virtual rig {why}: drive disabled, bus closed (exit status {status})"
 
 
 def harness_command(interface: str, channel: str, lockstep: bool) -> str:

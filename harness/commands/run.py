@@ -115,7 +115,7 @@ def print_run_peaks(console: Console, profile: Profile, motion: GroundMotion, se
     from harness.recording import load_run
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import record_span_s
-    from harness.signals.peaks import run_peaks
+    from harness.signals.peaks import ComparisonWindow, run_peaks
 
     if session.record_problem:
         console.print(f"[bold red]the recorder failed[/]: {escape(session.record_problem)}; the peaks below come "
@@ -124,7 +124,7 @@ def print_run_peaks(console: Console, profile: Profile, motion: GroundMotion, se
         f"[bold]{escape(profile.name)}[/] run, record [bold]{escape(motion.name)}[/]: PGA {motion.pga_g:.3f} g, "
         f"PGD {motion.pgd_m * 1e3:.1f} mm, time scale {motion.time_scale:g}, {motion.duration_s:.1f} s", highlight=False,
     )
-    title = "peak responses of the run (measured; no reference)"
+    title = f"peak responses of the run (measured; no reference), {ComparisonWindow(0.0, motion.duration_s).describe()}"
     span_s = record_span_s(session, motion)
     if span_s is not None:
         title += f", over the {span_s:.2f} s of record that ran before the run ended ({session.outcome})"

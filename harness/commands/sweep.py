@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import (
     BarColumn,
     MofNCompleteColumn,
@@ -316,7 +317,24 @@ def _summarize(results: Path, report: Path | None, console: Console) -> int:
     for table in tables:
         console.print(_text_table(table).to_rich(console.width))
     print_always(console, "wrote " + ", ".join(str(path) for path in files), highlight=False, soft_wrap=True)
+    for warning in _fragility_warnings(files):
+        print_always(console, f"[yellow]warning:[/] {escape(warning)}", highlight=False, soft_wrap=True)
     return exit_codes.OK
+
+
+def _fragility_warnings(files: list[Path]) -> list[str]:
+    """One line per fragility curve whose fit ``fragility.csv`` marks as not meaningful (harness/sweep/curves.py)."""
+    import csv
+
+    from harness.sweep.curves import NOT_MEANINGFUL
+
+    found = next((path for path in files if path.name == "fragility.csv"), None)
+    if found is None:
+        return []
+    with found.open(newline="", encoding="utf-8") as handle:
+        marked = {(row["response"], row["design"]): row["note"] for row in csv.DictReader(handle)
+                  if NOT_MEANINGFUL in row.get("note", "")}
+    return [f"fragility of {response}, {design}: {note}" for (response, design), note in marked.items()]
 
 
 #: Most rows of a summary table shown on the console; beyond it only the rows over all records.

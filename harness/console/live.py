@@ -113,6 +113,41 @@ def _events_text(status: LoopStatus) -> Text:
     return Text("\n".join(lines), overflow="ellipsis", no_wrap=True)
 
 
+def record_time_text(run_t_s: float, duration_s: float) -> str:
+    """The console's record line: record time out of the record, never past it.
+
+    After the record the loop keeps running (its tail, then the force's ramp to zero): that
+    time is shown apart, ``40.0 / 40.0 s (100.0 %), then 1.6 s after it``, not as record time.
+
+    Parameters
+    ----------
+    run_t_s : float
+        Time since RUNNING began (s).
+    duration_s : float
+        The record's duration (s).
+    """
+    played = min(run_t_s, duration_s) if duration_s > 0 else run_t_s
+    done = 0.0 if duration_s <= 0 else played / duration_s
+    text = f"{played:6.1f} / {duration_s:.1f} s  ({done * 100:5.1f} %)"
+    after = run_t_s - duration_s
+    return text + (f", then {after:.1f} s after it (tail, force ramp-down)" if duration_s > 0 and after >= 0.05 else "")
+
+
+def run_title(profile_name: str, kind: str, metadata: dict, controller: str, rate_hz: float, lockstep: bool) -> str:
+    """The live console's title: what the run is, e.g. ``nceer_4dof: identify actuator (blocked), ... at 500 Hz``.
+
+    An identification's session is a dry run or run for its folder (``kind``), but the operator
+    watches an identification: its metadata's ``identification`` entry names it.
+    """
+    identification = metadata.get("identification")
+    what = kind
+    if isinstance(identification, dict):
+        condition = identification.get("condition")
+        what = f"identify {identification.get('kind', '')}" + (f" ({condition})" if condition else "")
+        what += " on the virtual rig" if kind == "dry-run" else ""
+    return f"{profile_name}: {what}, {controller} at {rate_hz:g} Hz" + (" (lockstep)" if lockstep else "")
+
+
 def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, force_limit_N: float, title: str,
                  alerts: tuple[str, ...] = (), notes: tuple[str, ...] = ()) -> Panel:
     """The console's panel for the current contents of ``status``.
@@ -141,9 +176,7 @@ def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, f
     for note in notes:
         grid.add_row(Text("NOTE", style="bold yellow"), Text(note, style="yellow"))
     grid.add_row("state", _state_text(s))
-    run_t_s, duration_s = s.run_t_s, s.duration_s
-    done = 0.0 if duration_s <= 0 else min(1.0, run_t_s / duration_s)
-    grid.add_row("record", f"{run_t_s:6.1f} / {duration_s:.1f} s  ({done * 100:5.1f} %)")
+    grid.add_row("record", record_time_text(s.run_t_s, s.duration_s))
     grid.add_row("table check", _table_check_text(s))
     grid.add_row("stroke x_b", _bar_row(s.stroke_m, soft_limit_m, hard_limit_m, f"{s.stroke_m * 1e3:+7.2f} mm",
                                         f"±{soft_limit_m * 1e3:.0f} soft, ±{hard_limit_m * 1e3:.0f} hard"))

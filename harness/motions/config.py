@@ -34,7 +34,7 @@ from harness.motions.catalog import (
 )
 from harness.motions.checks import MIN_SAMPLES
 from harness.motions.loaders import RawRecord, load_record
-from harness.motions.processing import GroundMotion, process_record
+from harness.motions.processing import TIME_COMPRESSED, GroundMotion, process_record
 from harness.motions.synthetic import synthetic_record
 from harness.motions.white_noise import WhiteNoiseSpec, white_noise_record, white_noise_spec
 
@@ -212,11 +212,15 @@ def _white_noise_motion(
 ) -> GroundMotion:
     """White noise processed at the amplitude of its name, with a note where ``record.pga_g`` asked for another."""
     motion = process_record(raw, pga_g=spec.pga_g, time_scale=time_scale, duration_s=duration_s)
+    kept = tuple(note for note in motion.notes if not note.startswith(TIME_COMPRESSED))  # its band is not compressed
     notes = [f"white noise {spec.low_hz:g}-{spec.high_hz:g} Hz as the table plays it, at the {spec.pga_g:g} g its name gives"]
+    if time_scale != 1.0:
+        notes.append(f"time scale {time_scale:g}: generated over a band {time_scale:g} times lower, so the table still "
+                     f"plays {spec.low_hz:g}-{spec.high_hz:g} Hz (the band is not compressed)")
     if pga_g is not None and abs(pga_g - spec.pga_g) > 1e-9 * spec.pga_g:
         notes.append(f"record.pga_g (or --pga) of {pga_g:g} g does not apply to white noise: give the amplitude in its name, "
                      f"e.g. {WhiteNoiseSpec(spec.low_hz, spec.high_hz, pga_g).name}")
-    return dataclasses.replace(motion, notes=(*motion.notes, *notes))
+    return dataclasses.replace(motion, notes=(*kept, *notes))
 
 
 def _check_duration(duration_s: float | None, raw_dt_s: float, time_scale: float, name: str) -> None:

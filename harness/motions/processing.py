@@ -68,6 +68,8 @@ DEFAULT_TAPER_FRACTION = 0.01
 #: table to rest. On El Centro, Hachinohe and Pacoima (time scale 2, 0.34 g), cut anywhere
 #: after 4 s, the stop adds at most 0.2 % to the PGD of the kept motion and 0.1 % to its PGA.
 CUT_STOP_S = 1.0
+#: How the note of a time scale begins (a white noise, generated for its band, replaces it).
+TIME_COMPRESSED = "time compressed by"
 #: A cut that leaves out more than this share of the record's Arias intensity is warned about.
 ARIAS_WARNING_SHARE = 0.05
 
@@ -202,7 +204,7 @@ def process_record(
     notes: list[str] = []
     dt = raw.dt_s / time_scale
     if time_scale != 1.0:
-        notes.append(f"time compressed by {time_scale:g}: step {raw.dt_s:g} s -> {dt:g} s")
+        notes.append(f"{TIME_COMPRESSED} {time_scale:g}: step {raw.dt_s:g} s -> {dt:g} s")
     record = np.array(raw.accel_m_s2, dtype=float)
     accel, n_content = _cut(record, dt, duration_s, notes)
     peak = float(np.max(np.abs(accel)))

@@ -11,12 +11,13 @@ row; a report with no such run has no table.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 from harness.recording.reader import RunData
 from harness.report.force_tracking import ASKED_COLUMNS, ForceTracking, run_force_tracking
 from harness.report.reference import record_start_s
 from harness.report.text_table import TextTable
+from harness.signals.peaks import run_window
 
 __all__ = ["force_tracking_table", "record_span", "run_tracking"]
 
@@ -35,14 +36,13 @@ NOTE = ("Load cell (force_measured_N) over the record against the controller's f
 def record_span(run: RunData) -> tuple[float, float]:
     """Loop times (s) over which the run's actuator followed its controller: from the record's start to its end or the trip.
 
-    The end is the record's start plus its duration (infinite when unknown), or the run's first
-    fault event (a trip) if that came earlier: after a trip the force is the supervisor's, not the
-    controller's.
+    The end is the end of the run's comparison window (:func:`harness.signals.peaks.run_window`:
+    the record and its stated tail; infinite when unknown), or the run's first fault event (a
+    trip) if that came earlier: after a trip the force is the supervisor's, not the controller's.
     """
-    start = record_start_s(run)
-    record = run.metadata.get("record")
-    duration = record.get("duration_s") if isinstance(record, Mapping) else None
-    end = start + float(duration) if isinstance(duration, (int, float)) else math.inf
+    window = run_window(run.metadata)
+    start = window.start_s if window else record_start_s(run)
+    end = window.end_s if window else math.inf
     trips = [float(event["t_s"]) for event in run.events
              if event.get("kind") == "fault" and isinstance(event.get("t_s"), (int, float))]
     return start, min([end, *trips])

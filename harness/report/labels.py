@@ -32,6 +32,8 @@ _COVERED_PREFIXES = (
     "name", "description", "loaded_from", "variant", "record.", "control.controller", "control.rate_hz", "loop.rate_hz",
     "can.", "control.transport_delay_s", "control.friction", "control.design_stiffness_scale", "structure.assumptions",
 )
+#: Facts of the controller's sampling: a passive run (no controller) has none of them.
+CONTROLLER_FACTS = ("delay", "friction", "stiffness")
 #: Most differing profile settings spelt out in a label; more are counted.
 MAX_SETTINGS = 2
 _KIND_TEXT = {"simulation": "sim", "dry-run": "dry run", "run": "table run"}
@@ -114,7 +116,8 @@ def run_facts(run: RunData) -> dict[str, str]:
     controller = "passive" if run.is_passive else str(metadata.get("controller") or "")
     facts = {"kind": _kind(run), "controller": controller}
     facts |= _record_facts(metadata.get("record"))
-    facts |= _sampling_facts(run)
+    sampling = _sampling_facts(run)
+    facts |= {key: value for key, value in sampling.items() if not (run.is_passive and key in CONTROLLER_FACTS)}
     facts["variant"] = f"variant {run.profile['variant']}" if run.profile.get("variant") else "no variant"
     facts["profile"] = str(metadata.get("profile_name") or run.profile.get("name") or "")
     return {key: value for key, value in facts.items() if value}

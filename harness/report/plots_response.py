@@ -21,7 +21,7 @@ from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend, peak_of, record_time, small_runs
 from harness.report.plots_control import head_panels, record_panels, title_panel, usable_groups
 from harness.report.record_groups import RecordGroup
-from harness.report.reference import passive_reference
+from harness.report.reference import passive_reference, passive_reference_drifts
 from harness.signals.columns import drift
 from harness.signals.peaks import run_peaks
 
@@ -81,17 +81,25 @@ def peak_profile_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptio
         return save(fig, "peak_profile", "Peak drift and absolute acceleration over height", out_dir)
 
 
-def _drift_panels(axes: Sequence[Axes], group: RecordGroup, stories: int, scale: float) -> None:
+def _drift_panels(axes: Sequence[Axes], group: RecordGroup, stories: int, scale: float, references: bool = True) -> None:
+    """One panel per story; with ``references``, a dry run's simulated passive reference dashed in its colour."""
     for panel, story in zip(axes, range(stories, 0, -1), strict=True):
         for run, colour, text in group.members():
             if drift(story) in run.signals:
                 panel.plot(record_time(run), run[drift(story)] * scale, color=colour, lw=1.0, label=text)
+            passive = passive_reference_drifts(run) if references else None
+            if passive is not None and drift(story) in passive:
+                panel.plot(passive["t_s"], passive[drift(story)] * scale, REFERENCE_LINE, color=colour, lw=0.9,
+                           alpha=0.8, label=f"passive (sim.): {text}")
         panel.text(0.005, 0.96, f"story {story}", transform=panel.transAxes, va="top", ha="left",
                    fontweight="bold", bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.5})
 
 
 def drift_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> PlotFile | None:
     """Interstory drift histories, one panel per story (top story at the top), runs overlaid; a block per record.
+
+    A dry run's simulated passive reference (``passive_reference.csv``) is drawn dashed in the
+    run's colour, so a single dry run is seen against its passive case.
 
     Runs whose peak drift is more than 5 times below the largest of their record get a second
     column at their own scale.
@@ -111,7 +119,8 @@ def drift_plot(runs: Sequence[RunData], out_dir: Path, options: PlotOptions) -> 
             rows = grid[block * stories : (block + 1) * stories]
             _drift_panels(list(rows[:, 0]), group, stories, scale)
             if small:
-                _drift_panels(list(rows[:, 1]), group.having([i in small for i in range(len(group.runs))]), stories, scale)
+                _drift_panels(list(rows[:, 1]), group.having([i in small for i in range(len(group.runs))]), stories, scale,
+                              references=False)
             elif columns == 2:
                 for ax in rows[:, 1]:
                     ax.set_axis_off()

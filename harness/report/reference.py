@@ -24,12 +24,13 @@ from harness.motions.tracking import Tracking, tracking
 from harness.recording.reader import RunData
 from harness.report.peak_table import PeakTable
 from harness.report.table_check import run_table_check
-from harness.report.tables import peaks_comparison_table, peaks_pair_table
+from harness.report.tables import peaks_comparison_table, peaks_pair_table, window_note
 from harness.report.text_table import TextTable
 from harness.signals.peaks import Peaks, run_peaks
 
 REFERENCE_KEY = "reference"
 TARGET_FILE_KEY = "target_motion_file"
+PASSIVE_FILE_KEY = "passive_reference_file"
 G_M_S2 = 9.80665
 
 
@@ -70,7 +71,7 @@ def reference_tables(runs: Sequence[RunData]) -> list[PeakTable]:
             continue
         measured = run_peaks(run)
         passive, twin = _peaks(reference.get("passive_peaks")), _peaks(reference.get("twin_peaks"))
-        note = _span_note(reference)
+        note = _span_note(reference) + window_note((run,)) + " "
         check = run_table_check(run.metadata)  # a table that did not play the told record: no reductions
         if passive is not None:
             tables.append(peaks_pair_table(
@@ -112,6 +113,25 @@ def target_motion(run: RunData) -> TargetMotion | None:
     if table.shape[1] < 4 or table.shape[0] < 2:
         return None
     return TargetMotion(table[:, 0], table[:, 1], table[:, 2], table[:, 3])
+
+
+def passive_reference_drifts(run: RunData) -> dict[str, np.ndarray] | None:
+    """The dry run's simulated passive drift histories (``t_s`` in record time, ``drift_j_m``), or None.
+
+    None for a run without them (not a dry run, an older one, a file that cannot be read).
+    """
+    name = run.metadata.get(PASSIVE_FILE_KEY)
+    path = run.path / name if isinstance(name, str) else None
+    if path is None or not path.is_file():
+        return None
+    try:
+        header = path.read_text(encoding="utf-8").split("\n", 1)[0].strip().split(",")
+        table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+    if table.shape[1] != len(header) or table.shape[0] < 2 or header[0] != "t_s":
+        return None
+    return {column: table[:, index] for index, column in enumerate(header)}
 
 
 def record_start_s(run: RunData) -> float:

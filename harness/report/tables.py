@@ -32,7 +32,7 @@ from harness.report.quantities import (
     response_quantities,
 )
 from harness.report.table_check import run_table_check
-from harness.signals.peaks import Peaks, force_column, run_peaks
+from harness.signals.peaks import Peaks, force_column, run_peaks, run_window
 
 
 def _row(quantity: Quantity, values: Sequence[float | None]) -> PeakRow:
@@ -122,7 +122,7 @@ def runs_table(runs: Sequence[RunData]) -> PeakTable:
     rows = tuple(_row(q, [q.display_value(p) for p in peaks]) for q in report_quantities(_stories(runs)))
     labels = tuple(run.label for run in runs)
     return PeakTable("Peak responses", _headings(REPORT_WORDING), labels, _drop_empty(rows), (None,) * len(runs),
-                     _force_note(runs))
+                     _join(window_note(runs), _force_note(runs)))
 
 
 def peaks_pair_table(
@@ -149,7 +149,8 @@ def pair_table(passive: RunData, controlled: RunData) -> PeakTable:
     first = passive.label if "passive" in passive.label else f"passive: {passive.label}"
     check = run_table_check(controlled.metadata)
     return peaks_pair_table(run_peaks(passive), run_peaks(controlled), f"Passive against controlled: {controlled.label}",
-                            (first, controlled.label), _force_note((controlled,)), check.withheld, check.flagged)
+                            (first, controlled.label), _join(window_note((passive, controlled)), _force_note((controlled,))),
+                            check.withheld, check.flagged)
 
 
 def _difference_row(quantity: Quantity, first: Peaks, second: Peaks) -> PeakRow:
@@ -171,13 +172,30 @@ def peaks_comparison_table(first: Peaks, second: Peaks, title: str, labels: tupl
 
 def comparison_table(first: RunData, second: RunData) -> PeakTable:
     """Both runs' peaks, ``second - first`` and that difference in percent of ``first``."""
-    note = f"A = {first.label} ({first.path}); B = {second.label} ({second.path}). " + _force_note((first, second))
+    note = _join(f"A = {first.label} ({first.path}); B = {second.label} ({second.path}).",
+                 window_note((first, second)), _force_note((first, second)))
     return peaks_comparison_table(run_peaks(first), run_peaks(second), f"Comparison: {first.label} against {second.label}",
                                   (f"A: {first.label}", f"B: {second.label}"), note)
 
 
 def _drop_empty(rows: tuple[PeakRow, ...]) -> tuple[PeakRow, ...]:
     return tuple(row for row in rows if any(value is not None for value in row.values))
+
+
+def _join(*notes: str) -> str:
+    return " ".join(note for note in notes if note)
+
+
+def window_note(runs: Sequence[RunData]) -> str:
+    """Over which rows the runs' peaks were taken (:func:`harness.signals.peaks.run_window`), once when they share it."""
+    windows = {run.label: run_window(run.metadata) for run in runs}
+    texts = {label: window.describe() if window else "every row (no record in the metadata)"
+             for label, window in windows.items()}
+    if not texts:
+        return ""
+    if len(set(texts.values())) == 1:
+        return f"Peaks {next(iter(texts.values()))}; rows after it are not compared."
+    return "Peaks " + "; ".join(f"{text} ({label})" for label, text in texts.items()) + "; rows after it are not compared."
 
 
 def _force_note(runs: Sequence[RunData]) -> str:

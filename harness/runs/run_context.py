@@ -5,7 +5,8 @@ prints the peaks beside them. :func:`write_dry_run_context` keeps those in the r
 the report shows the same: ``metadata.json`` gains a ``reference`` entry (the passive
 reference's and the twin's peaks, SI, and the span they cover), and ``target_motion.csv``
 holds the processed record the table was asked to follow (record time, SI), against which
-the report draws the table motion the sensors measured.
+the report draws the table motion the sensors measured; ``passive_reference.csv`` holds the
+passive reference's drift histories (record time, SI), which the report overlays on the run's.
 """
 
 from __future__ import annotations
@@ -19,11 +20,14 @@ import numpy as np
 
 from harness.recording.layout import METADATA_FILE
 from harness.recording.metadata import write_json_atomic
+from harness.signals.columns import TIME, count_stories, drift
 from harness.simulation.case import CaseResult
 
 #: The processed record the table was asked to follow (columns: :data:`TARGET_COLUMNS`).
 TARGET_MOTION_FILE = "target_motion.csv"
 TARGET_COLUMNS = ("t_s", "table_acceleration_m_s2", "table_velocity_m_s", "table_displacement_m")
+#: The passive reference's drift histories (record time, SI): ``t_s``, ``drift_1_m`` ...
+PASSIVE_REFERENCE_FILE = "passive_reference.csv"
 #: The ``metadata.json`` key of the simulated references.
 REFERENCE_KEY = "reference"
 
@@ -57,6 +61,17 @@ def write_target_motion(folder: Path, motion: Any) -> Path:
     return path
 
 
+def write_passive_reference(folder: Path, passive: CaseResult) -> Path | None:
+    """Write the passive reference's drift histories (:data:`PASSIVE_REFERENCE_FILE`); None if it has none."""
+    names = [drift(j) for j in range(1, count_stories(tuple(passive.columns)) + 1)]
+    if TIME not in passive.columns or not names:
+        return None
+    path = folder / PASSIVE_REFERENCE_FILE
+    table = np.column_stack([passive.columns[TIME], *(passive.columns[name] for name in names)])
+    np.savetxt(path, table, delimiter=",", header=",".join((TIME, *names)), comments="", fmt="%.12g")
+    return path
+
+
 def write_dry_run_context(
     run_path: Path, motion: Any, passive: CaseResult | None, twin: CaseResult | None, span_s: float | None,
     lockstep: bool,
@@ -84,4 +99,6 @@ def write_dry_run_context(
     metadata = json.loads(metadata_path.read_text(encoding="utf-8"))
     metadata[REFERENCE_KEY] = reference_entry(passive, twin, span_s, lockstep)
     metadata["target_motion_file"] = TARGET_MOTION_FILE
+    if passive is not None and write_passive_reference(folder, passive) is not None:
+        metadata["passive_reference_file"] = PASSIVE_REFERENCE_FILE
     write_json_atomic(metadata_path, metadata)

@@ -19,7 +19,7 @@ from drivers.reader import CONTROL_MEASUREMENTS
 from harness import exit_codes
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness
-from harness.console.live import LiveConsole
+from harness.console.live import LiveConsole, run_title
 from harness.control.compensation import NoCompensation
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
@@ -358,8 +358,8 @@ def run_session(
                            table_running=table_link.running if table_link is not None else None, scheduling=scheduling,
                            recorder_error=lambda: recording.writer_error)
         controller_name = settings.metadata.get("controller", profile.control.controller)  # an excitation names itself
-        title = f"{profile.name}: {settings.kind}, {controller_name} at {profile.control.rate_hz:g} Hz"
-        title += " (lockstep)" if lockstep else ""
+        title = run_title(profile.name, settings.kind, settings.metadata, controller_name, profile.control.rate_hz,
+                          bool(lockstep))
         alerts = (summary(profile.safety_weakened),) if profile.safety_weakened else ()
         with LiveConsole(status, profile.safety.stroke.soft_limit_m, profile.safety.stroke.hard_limit_m,
                          profile.safety.force.max_force_N, title, console, settings.show_console, alerts,

@@ -7,6 +7,12 @@ simulate``, dry runs, reports and benchmarks all read their peaks from here, and
 two cases with :func:`reduction_pct`. Rendering (console, HTML, CSV) is
 :mod:`harness.report.peak_table`'s business.
 
+Every peak compared is taken over one window, :class:`ComparisonWindow`: the record's
+duration from the moment the record started, plus :data:`COMPARISON_TAIL_S`. A dry run or
+table run keeps running after its record (the loop's ``tail_s``, then the force's ramp to
+zero); those rows are not compared, because the simulated cases it is compared with end with
+the record.
+
 Values are SI. A peak with nothing to measure (the column is absent, or holds no finite
 value) is NaN.
 """
@@ -29,6 +35,7 @@ from harness.signals.columns import (
     TABLE_ACCELERATION,
     TABLE_DISPLACEMENT,
     TABLE_VELOCITY,
+    TIME,
     count_stories,
     drift,
     floor_acceleration,
@@ -42,6 +49,62 @@ if TYPE_CHECKING:
 FORCE_COLUMNS: tuple[str, ...] = (FORCE_COMMAND, FORCE_RAW)
 
 NAN = float("nan")
+#: Seconds after the record's end that comparisons include (s). The simulated cases a run is
+#: compared with (the passive reference, the rig twin, ``harness simulate``) end with the record,
+#: whose last second brings the table to rest; a longer tail would compare a run's free decay
+#: and the loop's force ramp-down with nothing.
+COMPARISON_TAIL_S = 0.0
+
+
+@dataclass(frozen=True)
+class ComparisonWindow:
+    """The rows compared: from the record's start, its duration plus a tail (loop time, s).
+
+    Attributes
+    ----------
+    start_s : float
+        Loop time at which the record started (s): 0 for a simulated case.
+    record_s : float
+        The record's duration (s).
+    tail_s : float
+        Time after the record's end that is included (s).
+    """
+
+    start_s: float
+    record_s: float
+    tail_s: float = COMPARISON_TAIL_S
+
+    @property
+    def end_s(self) -> float:
+        """Loop time of the window's last row (s)."""
+        return self.start_s + self.record_s + self.tail_s
+
+    def inside(self, t_s: np.ndarray) -> np.ndarray:
+        """Which of the times ``t_s`` (s) fall in the window (a boolean mask); a tick's rounding is allowed."""
+        slack = 1e-9 * max(1.0, abs(self.end_s))
+        return (t_s >= self.start_s - slack) & (t_s <= self.end_s + slack)
+
+    def describe(self) -> str:
+        """What the tables say: ``"compared over the record (30.00 s) plus a 0 s tail"``."""
+        return f"compared over the record ({self.record_s:.2f} s) plus a {self.tail_s:g} s tail"
+
+
+def windowed(columns: Mapping[str, np.ndarray], window: ComparisonWindow | None) -> Mapping[str, np.ndarray]:
+    """The rows of ``columns`` inside ``window`` (all of them without a window or a time column)."""
+    if window is None or TIME not in columns:
+        return columns
+    keep = window.inside(np.asarray(columns[TIME], dtype=float))
+    return {name: np.asarray(values)[keep] for name, values in columns.items()}
+
+
+def run_window(metadata: Mapping[str, object]) -> ComparisonWindow | None:
+    """A run folder's comparison window, from its metadata: the record's start and duration; None without a record."""
+    record, summary = metadata.get("record"), metadata.get("summary")
+    duration = record.get("duration_s") if isinstance(record, Mapping) else None
+    start = summary.get("record_start_t_s") if isinstance(summary, Mapping) else None
+    if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not duration > 0:
+        return None
+    return ComparisonWindow(float(start) if isinstance(start, (int, float)) else 0.0, float(duration))
 
 
 @dataclass(frozen=True)
@@ -149,7 +212,8 @@ def _control_force_pct(columns: Mapping[str, np.ndarray], total_weight_N: float 
 
 
 def peak_responses(
-    columns: Mapping[str, np.ndarray], total_weight_N: float | None, *, passive: bool | None = None
+    columns: Mapping[str, np.ndarray], total_weight_N: float | None, *, passive: bool | None = None,
+    window: ComparisonWindow | None = None,
 ) -> Peaks:
     """Peaks of one case from its columns.
 
@@ -164,11 +228,14 @@ def peak_responses(
     passive : bool, optional
         Whether the case has no controller, so that no force column means a force of 0 %.
         Default: passive exactly when no column of :data:`FORCE_COLUMNS` is present.
+    window : ComparisonWindow, optional
+        Only the rows inside it (by ``t_s``) are measured; default: every row.
 
     Returns
     -------
     Peaks
     """
+    columns = windowed(columns, window)
     stories = range(1, count_stories(tuple(columns)) + 1)
     measured = _column_peak(columns, FORCE_MEASURED)
     return Peaks(
@@ -185,13 +252,15 @@ def peak_responses(
 
 
 def run_peaks(run: RunData) -> Peaks:
-    """Peaks of a run folder read back (:func:`harness.recording.load_run`), over all its rows.
+    """Peaks of a run folder read back (:func:`harness.recording.load_run`), over its comparison window.
 
-    The weight is the metadata's ``total_weight_N``; a run is passive when its case or
-    controller is ``"passive"``.
+    The window is :func:`run_window` (the record and :data:`COMPARISON_TAIL_S`; every row of a
+    run without a record). The weight is the metadata's ``total_weight_N``; a run is passive
+    when its case or controller is ``"passive"``.
     """
     weight = run.metadata.get("total_weight_N")
-    return peak_responses(run.signals, weight if isinstance(weight, (int, float)) else None, passive=run.is_passive)
+    return peak_responses(run.signals, weight if isinstance(weight, (int, float)) else None, passive=run.is_passive,
+                          window=run_window(run.metadata))
 
 
 #: A reference (passive) peak at or below this, in its SI unit (m, m/s^2, % of the weight), is

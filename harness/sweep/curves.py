@@ -7,7 +7,10 @@
   with a lognormal fit ``P(exceed | PGA = x) = Phi(ln(x / theta) / beta)`` by maximum
   likelihood on the binomial counts (Baker 2015, "Efficient analytical fragility function
   fitting using dynamic structural analysis"): ``theta`` is the median PGA at which the
-  limit is exceeded (g), ``beta`` the logarithmic standard deviation.
+  limit is exceeded (g), ``beta`` the logarithmic standard deviation. A fit the counts cannot
+  support is kept but marked (:func:`fit_warning`): a step (no level where some but not all
+  cases exceed: ``beta`` is then whatever the optimizer stops at, and ``theta`` anywhere
+  between two levels fits) or fewer than :data:`MIN_CASES_PER_LEVEL` cases at a level.
 """
 
 from __future__ import annotations
@@ -21,6 +24,11 @@ from harness.sweep.summary import groups, ok_rows, passive_rows
 
 Columns = Mapping[str, np.ndarray]
 PASSIVE_DESIGN = "passive"
+#: Fewest cases at a PGA level for its share to resolve 10 % of exceedance; with fewer (2 records
+#: a level give shares of 0, 0.5 or 1 only) the fitted curve is not meaningful.
+MIN_CASES_PER_LEVEL = 10
+#: How a note marks a fit the counts do not support.
+NOT_MEANINGFUL = "fit not meaningful"
 
 
 @dataclass(frozen=True)
@@ -46,6 +54,11 @@ class Fragility:
     theta_g: float
     beta: float
     note: str = ""
+
+    @property
+    def meaningful(self) -> bool:
+        """Whether the fit is there and the counts support it (:func:`fit_warning` found nothing)."""
+        return bool(np.isfinite(self.theta_g)) and NOT_MEANINGFUL not in self.note
 
     @property
     def share(self) -> np.ndarray:
@@ -104,6 +117,24 @@ def fit_lognormal(pga_g: np.ndarray, exceeded: np.ndarray, count: np.ndarray) ->
     return float(np.exp(best.x[0])), float(np.exp(best.x[1])), "" if best.success else f"fit: {best.message}"
 
 
+def fit_warning(exceeded: np.ndarray, count: np.ndarray) -> str:
+    """Why a lognormal fit to these counts is not meaningful ("" if it is), for the plot, CSV and summary.
+
+    Parameters
+    ----------
+    exceeded, count : ndarray of int
+        Cases exceeding the limit, and cases, at each PGA level.
+    """
+    between = (exceeded > 0) & (exceeded < count)
+    if not between.any():
+        return (f"{NOT_MEANINGFUL}: a step (no PGA level where some but not all cases exceed), so beta is not "
+                "determined and theta lies anywhere between two levels")
+    if np.min(count) < MIN_CASES_PER_LEVEL:
+        return (f"{NOT_MEANINGFUL}: {int(np.min(count))} cases at a level, fewer than {MIN_CASES_PER_LEVEL} "
+                "(more records or samples per level)")
+    return ""
+
+
 def fragility(design: str, pga: np.ndarray, response: np.ndarray, limit: float) -> Fragility:
     """Exceedance of ``limit`` by ``response`` at each PGA level, with its lognormal fit."""
     levels = _levels(pga)
@@ -111,6 +142,8 @@ def fragility(design: str, pga: np.ndarray, response: np.ndarray, limit: float) 
     count = np.array([np.sum((pga == level) & valid) for level in levels], dtype=int)
     exceeded = np.array([np.sum((pga == level) & valid & (response > limit)) for level in levels], dtype=int)
     theta, beta, note = fit_lognormal(levels, exceeded, count)
+    if np.isfinite(theta):
+        note = "; ".join(text for text in (note, fit_warning(exceeded, count)) if text)
     return Fragility(design, levels, exceeded, count, theta, beta, note)
 
 

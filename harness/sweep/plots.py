@@ -15,7 +15,7 @@ matplotlib.use("Agg")  # files only, no display (a worker or a cluster node has 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from harness.sweep.curves import PASSIVE_DESIGN, Fragility, IdaCurve  # noqa: E402
+from harness.sweep.curves import MIN_CASES_PER_LEVEL, NOT_MEANINGFUL, PASSIVE_DESIGN, Fragility, IdaCurve  # noqa: E402
 
 MM_PER_M = 1000.0
 DPI = 110
@@ -82,9 +82,15 @@ def _fragility_panel(ax, curves: Sequence[Fragility], title: str) -> None:
     for i, curve in enumerate(curves):
         style = _style(i - 1, curve.design)
         fit = f"theta {curve.theta_g:.3g} g, beta {curve.beta:.2f}" if np.isfinite(curve.theta_g) else curve.note
+        if np.isfinite(curve.theta_g) and not curve.meaningful:
+            fit += f" ({NOT_MEANINGFUL})"
         ax.plot(curve.pga_g, curve.share, ls="none", marker=style["marker"], ms=style["ms"] + 1, color=style["color"],
                 label=f"{curve.design}: {fit}")
-        ax.plot(grid, curve.fitted(grid), ls=style["ls"], lw=style["lw"], color=style["color"])
+        line = style["ls"] if curve.meaningful else ":"  # a fit the counts do not support: dotted, and said
+        ax.plot(grid, curve.fitted(grid), ls=line, lw=style["lw"], color=style["color"])
+    if any(np.isfinite(curve.theta_g) and not curve.meaningful for curve in curves):
+        title += (f"\ndotted: {NOT_MEANINGFUL} (a step, or fewer than {MIN_CASES_PER_LEVEL} cases a level;"
+                  "\nfragility.csv's note says which)")
     ax.set_xlabel("PGA (g)")
     ax.set_ylabel("P(exceeding)")
     ax.set_ylim(-0.03, 1.03)

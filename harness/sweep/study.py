@@ -165,7 +165,7 @@ class Study:
     """A whole validated study file."""
 
     name: str = quantity(doc="short name, used for the results folder")
-    profile: str = quantity(doc="the base profile (relative to the study file)")
+    profile: str = quantity(doc="the base profile (relative to the study file), or a shipped profile's name")
     description: str = ""
     variant: str | None = quantity(None, doc="a variant of the profile applied to every case")
     set: tuple[str, ...] = quantity((), doc="KEY.PATH=VALUE overrides applied to every case, as --set")
@@ -196,8 +196,17 @@ class Study:
         return Path(self.source_path).parent if self.source_path else Path.cwd()
 
     def profile_path(self) -> Path:
-        """The base profile file, absolute."""
-        return (self.base_dir / Path(self.profile).expanduser()).resolve()
+        """The base profile file, absolute: a file relative to the study file, else a shipped profile's name.
+
+        A name the command line takes for a shipped profile (``nceer_4dof``,
+        ``profiles/eight_story.yaml``) names it here too, found by the same resolver
+        (:func:`harness.commands.options.shipped_profile`); a file beside the study wins.
+        """
+        from harness.commands.options import shipped_profile
+
+        beside = (self.base_dir / Path(self.profile).expanduser()).resolve()
+        shipped = None if beside.is_file() else shipped_profile(self.profile, existing_wins=False)
+        return beside if shipped is None else shipped.resolve()
 
     def overlay_path(self) -> Path | None:
         """The overlay file, absolute, or None."""

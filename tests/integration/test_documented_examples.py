@@ -5,7 +5,10 @@ The examples are read from the text a user reads: the README's fenced ``sh`` blo
 one block run in order in one scratch folder, so a ``harness simulate ... --out study/`` makes
 the folder the next ``harness report study/`` reads, as the docs chain them. The records are
 the ones beside the checkout: ``../shared/data/ground_motions`` in an example, and
-``$HARNESS_RECORDS_DIR`` as the README tells a user to set it.
+``$HARNESS_RECORDS_DIR`` only where the README has exported it (an ``export`` line in that block
+or an earlier one, run from the checkout's root; the examples of ``--help`` come after the whole
+README): nothing else is set, so an example that names a record the reader has not been told how
+to find fails here as it fails for a new user.
 
 Running every example in full would take many minutes, so each gets the cheapest check that
 still fails when the example is refused (:func:`check_for`):
@@ -45,6 +48,7 @@ import pytest
 from harness import exit_codes
 from harness.cli import build_parser, main
 from harness.commands.options import load_acknowledged
+from harness.motions.catalog import ENV_RECORDS_DIR
 from tests.conftest import REPO, SHARED_RECORDS
 
 README = REPO / "README.md"
@@ -79,11 +83,19 @@ class Example:
 
 @dataclass
 class Block:
-    """Examples written together (a README code block, one command's --help), run in order in one folder."""
+    """Examples written together (a README code block, one command's --help), run in order in one folder.
+
+    ``environment``: the variables the README has exported by the end of this block, as written.
+    """
 
     name: str
     examples: list[Example] = field(default_factory=list)
     other_lines: list[str] = field(default_factory=list)
+    environment: dict[str, str] = field(default_factory=dict)
+
+
+#: ``export NAME=VALUE`` in a README block: the reader sets it in their shell, from the checkout's root.
+EXPORT = re.compile(r"^export\s+([A-Z_][A-Z0-9_]*)=(\S+)")
 
 
 @dataclass(frozen=True)
@@ -115,6 +127,7 @@ def readme_blocks() -> list[Block]:
     """The README's ``sh`` blocks: each line (backslash continuations joined) a command."""
     blocks = []
     text = README.read_text(encoding="utf-8")
+    exported: dict[str, str] = {}
     for number, match in enumerate(re.finditer(r"^```sh\n(.*?)^```", text, re.M | re.S)):
         line_no = text.count("\n", 0, match.start()) + 1
         block = Block(f"README.md:{line_no}")
@@ -125,8 +138,18 @@ def readme_blocks() -> list[Block]:
                 block.examples.append(_example(line, f"{block.name} (block {number})"))
             else:
                 block.other_lines.append(line.strip())
+                export = EXPORT.match(_split_comment(line.strip())[0])
+                if export:
+                    exported[export.group(1)] = export.group(2)
+        block.environment = dict(exported)
         blocks.append(block)
     return blocks
+
+
+def readme_environment() -> dict[str, str]:
+    """Everything the README exports, in the end (what a reader's shell has when reading ``--help``)."""
+    blocks = readme_blocks()
+    return blocks[-1].environment if blocks else {}
 
 
 def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
@@ -144,10 +167,11 @@ def _command_parsers() -> Iterator[tuple[str, argparse.ArgumentParser]]:
 
 
 def help_blocks() -> list[Block]:
-    """The "example(s):" section of each command's --help, as the user reads it."""
+    """The "example(s):" section of each command's --help, as the user reads it (after the README)."""
     blocks = []
+    environment = readme_environment()
     for name, parser in _command_parsers():
-        block = Block(f"harness {name} --help")
+        block = Block(f"harness {name} --help", environment=dict(environment))
         lines = parser.format_help().splitlines()
         starts = [i for i, line in enumerate(lines) if re.fullmatch(r"examples?:", line.strip())]
         assert starts, f"{block.name} has no example (README: every command has --help with an example)"
@@ -242,6 +266,11 @@ def _with_records(argv: list[str]) -> list[str]:
     return [word.replace(DOCUMENTED_RECORDS, str(SHARED_RECORDS)) for word in argv]
 
 
+def _exported(value: str) -> str:
+    """An exported value as the reader's shell has it: ``$PWD`` is the checkout's root, where they run it."""
+    return value.replace("$PWD", str(REPO)).replace("${PWD}", str(REPO))
+
+
 def _check(example: Example, monkeypatch: pytest.MonkeyPatch, folder: Path, capsys) -> str:
     """Check one example; a line for the log. Raises AssertionError naming the example when it fails."""
     records = (SHARED_RECORDS / "elcentro_1940_NS.csv").is_file()
@@ -278,12 +307,16 @@ BLOCKS = readme_blocks() + help_blocks()
 @pytest.mark.parametrize("block", BLOCKS, ids=[block.name for block in BLOCKS])
 def test_every_documented_example_does_what_its_docs_say(block: Block, tmp_path: Path, monkeypatch, capsys) -> None:
     monkeypatch.chdir(tmp_path)  # outputs (study/, out.json, frf/) land here; profiles are found by name
-    monkeypatch.setenv("HARNESS_RECORDS_DIR", str(SHARED_RECORDS))
+    monkeypatch.delenv(ENV_RECORDS_DIR, raising=False)  # only what the README told the reader to set
+    for name, value in block.environment.items():
+        monkeypatch.setenv(name, _exported(value))
     makefile = (REPO / "Makefile").read_text()
     for line in block.other_lines:
         words = line.split()
         if words[0] == "make":  # the quick start: the targets must exist (they run the dry run and every test)
             assert re.search(rf"^{re.escape(words[1])}:", makefile, re.M), f"{block.name}: no Makefile target {line}"
+        elif words[0] == "export":  # applied above, to this block and every later one
+            assert EXPORT.match(line), f"{block.name}: an export the test does not read: {line!r}"
         else:
             assert words[0] == "sudo", f"{block.name}: no check decided for {line!r}"  # kernel set-up (root)
     log = [_check(example, monkeypatch, tmp_path, capsys) for example in block.examples]
@@ -298,6 +331,11 @@ def test_the_examples_are_found() -> None:
     assert sum(len(block.examples) for block in BLOCKS) >= 40
     trips = [example for block in BLOCKS for example in block.examples if TRIP.search(example.comment)]
     assert trips and all(check_for(e, _parse(_with_records(e.argv)), True).status == exit_codes.TRIPPED for e in trips)
+    # the README says once where the records are, and it names the folder the tests read them from
+    told = readme_environment().get(ENV_RECORDS_DIR)
+    assert told and Path(_exported(told)).resolve() == SHARED_RECORDS.resolve()
+    first_record = next(b for b in readme_blocks() if any(REAL_RECORDS.search(e.text) for e in b.examples))
+    assert ENV_RECORDS_DIR in first_record.environment, f"{first_record.name} names a record before the README says where"
 
 
 #: A ``--set`` written in running text or an option's help: ``--set KEY.PATH=VALUE`` with a real key.
@@ -326,3 +364,25 @@ def test_every_set_the_docs_mention_is_accepted_on_the_default_profile() -> None
             except Exception as refused:
                 raise AssertionError(f"{where}: --set {override} is refused: {refused}") from refused
     assert found >= 5
+
+
+#: Options whose value is a file or folder the example writes.
+OUTPUT_OPTIONS = ("--out", "--report", "--json")
+
+
+def test_what_the_examples_write_in_the_checkout_is_ignored_by_git() -> None:
+    """Run from the checkout, as the README's are, an example's results must not show up as changes to commit."""
+    import shutil
+    import subprocess
+
+    if shutil.which("git") is None or not (REPO / ".git").exists():
+        pytest.skip("not a git checkout")
+    written = sorted({example.argv[i + 1] for block in BLOCKS for example in block.examples
+                      for i, word in enumerate(example.argv[:-1]) if word in OUTPUT_OPTIONS and example.argv[i + 1] != "-"})
+    assert {"frf/", "ident/bearing", "ident/structure", "study/"} <= set(written)
+    paths = [f"{path.rstrip('/')}/identified.yaml" if not path.endswith(".json") else path for path in written
+             if not Path(path).is_absolute() and not path.startswith(("..", "<"))]
+    found = subprocess.run(["git", "check-ignore", "--no-index", *paths], cwd=REPO, capture_output=True, text=True)
+    ignored = set(found.stdout.split())
+    assert not [path for path in paths if path not in ignored], "not git-ignored: " + ", ".join(
+        path for path in paths if path not in ignored)
