@@ -128,7 +128,7 @@ def structure_record(run: RunData, n_stories: int, band_hz: tuple[float, float] 
 
 
 def check_band_bins(measured: MeasuredResponse, band_hz: tuple[float, float], given: bool) -> None:
-    """Refuse a band holding fewer than :data:`~harness.identification.choices.MIN_BAND_BINS` frequencies of the measured response.
+    """Refuse a band holding fewer than :data:`~harness.identification.choices.MIN_BAND_BINS` frequencies of the response.
 
     The response has a frequency every ``1 / segment`` Hz, and a segment is at most a quarter
     of the shortest run (:func:`~harness.identification.structure_records.frf_estimate`).

@@ -200,9 +200,9 @@ class Study:
 
         A name the command line takes for a shipped profile (``nceer_4dof``,
         ``profiles/eight_story.yaml``) names it here too, found by the same resolver
-        (:func:`harness.commands.options.shipped_profile`); a file beside the study wins.
+        (:func:`harness.paths.shipped_profile`); a file beside the study wins.
         """
-        from harness.commands.options import shipped_profile
+        from harness.paths import shipped_profile
 
         beside = (self.base_dir / Path(self.profile).expanduser()).resolve()
         shipped = None if beside.is_file() else shipped_profile(self.profile, existing_wins=False)
