@@ -61,8 +61,10 @@ if TYPE_CHECKING:
     from harness.motions import GroundMotion
     from harness.profile import Profile
 
-#: HEARTBEAT states of a harness whose run has ended: the table it started is held (``_stop_table_after_the_run``).
-RUN_ENDED_STATES = frozenset({int(State.DONE), int(State.TRIPPED)})
+#: HEARTBEAT state of a harness whose run has ended normally: the table it started is held
+#: (``_stop_table_after_the_run``). Not TRIPPED: after a trip the profile's trip actions decide whether
+#: the table stops (``stop_table``); a table controller does not stop on its own because the harness tripped.
+RUN_ENDED_STATES = frozenset({int(State.DONE)})
 
 
 class VirtualRig:
@@ -374,7 +376,7 @@ class VirtualRig:
             self._on_drive_reset(now)
 
     def _stop_table_after_the_run(self) -> None:
-        """The harness's heartbeat says its run ended (DONE or TRIPPED): hold the table it started.
+        """The harness's heartbeat says its run ended (DONE): hold the table it started.
 
         A table left running after its run would play on while the next harness waits idle, and
         that harness's start would find it running (RIG_STATUS ``start_refused``).

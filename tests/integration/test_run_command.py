@@ -44,7 +44,7 @@ def test_the_arm_prompt_says_the_drive_will_be_reset(monkeypatch, capsys):
 
 def test_reset_drive_needs_an_external_rig(capsys):
     assert main(["dry-run", "--reset-drive"]) == exit_codes.INPUT_ERROR
-    assert "add --external-rig" in capsys.readouterr().out
+    assert "add --external-rig" in capsys.readouterr().err  # an error, on standard error (also under --quiet)
 
 
 @pytest.mark.parametrize("lockstep", [False, True])
