@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
+from typing import Any
 
 import can
 
@@ -83,13 +84,14 @@ def _checked_bus(
     dbc_path: str | Path | None,
     fd: bool = False,
     data_bitrate_bps: int | None = None,
+    bus_options: Mapping[str, Any] | None = None,
 ) -> tuple[can.BusABC, Protocol, BusLoad, BusHealth]:
     """What both sides do before their reader and writer: :func:`prepare`, then open the bus, with a fresh health."""
     protocol, load = prepare(
         rates_hz, bitrate_bps, max_bus_load=max_bus_load, protocol_version=protocol_version, dbc_path=dbc_path,
         fd=fd, data_bitrate_bps=data_bitrate_bps,
     )
-    bus = open_bus(interface, channel, bitrate_bps, fd=fd, data_bitrate_bps=data_bitrate_bps)
+    bus = open_bus(interface, channel, bitrate_bps, fd=fd, data_bitrate_bps=data_bitrate_bps, **(bus_options or {}))
     return bus, protocol, load, BusHealth()
 
 
@@ -147,6 +149,7 @@ def open_harness(
     max_frames_per_poll: int = 256,
     fd: bool = False,
     data_bitrate_bps: int | None = None,
+    bus_options: Mapping[str, Any] | None = None,
 ) -> HarnessLink:
     """Check the settings, then open the bus for the harness side.
 
@@ -160,6 +163,8 @@ def open_harness(
         The reader takes a frame's receive time from ``msg.timestamp`` instead of ``poll``'s ``now``.
     max_frames_per_poll : int
         Most frames one ``poll`` of the reader handles.
+    bus_options : mapping, optional
+        Further keyword arguments of the interface's bus (the ``seqpacket`` bus's ``peer_group``, ``peer_pids``).
 
     Raises
     ------
@@ -169,7 +174,8 @@ def open_harness(
         The bus cannot be opened (says how to fix it).
     """
     bus, protocol, load, health = _checked_bus(
-        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps
+        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps,
+        bus_options,
     )
     reader = HarnessReader(bus, protocol, health, use_msg_timestamp=use_msg_timestamp, max_frames=max_frames_per_poll)
     return HarnessLink(bus, protocol, load, health, reader, HarnessWriter(bus, protocol, health))
@@ -186,9 +192,11 @@ def open_rig(
     dbc_path: str | Path | None = None,
     fd: bool = False,
     data_bitrate_bps: int | None = None,
+    bus_options: Mapping[str, Any] | None = None,
 ) -> RigLink:
-    """Check the settings, then open the bus for the rig side (the virtual rig); parameters as :func:`prepare`."""
+    """Check the settings, then open the bus for the rig side (the virtual rig); parameters as :func:`open_harness`."""
     bus, protocol, load, health = _checked_bus(
-        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps
+        interface, channel, bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps,
+        bus_options,
     )
     return RigLink(bus, protocol, load, health, RigWriter(bus, protocol, health))

@@ -226,7 +226,7 @@ class RigWriter(FrameWriter):
         self._estop = self.frame("ESTOP")
         self._v3 = [0.0, 0.0, 0.0]
         self._v4 = [0.0, 0.0, 0.0, 0.0]
-        self._v5 = [0.0, 0.0, 0.0, 0.0, 0.0]
+        self._v5 = [0.0] * 6
 
     def _send3(self, tx: TxFrame, a: float, b: float, c: float, now: float) -> bool:
         values = self._v3
@@ -265,9 +265,14 @@ class RigWriter(FrameWriter):
         values[0], values[1], values[2], values[3] = drive_state, (1.0 if pressure_ok else 0.0), fault_code, force_n
         return self.send_frame(self._status, values, now)
 
-    def rig_status(self, running: bool, lockstep: bool, fault_active: bool, record_time_s: float, step: int, now: float) -> bool:
-        """Send RIG_STATUS; ``record_time_s`` 0..1677 s, ``step`` is sent modulo 2**24."""
+    def rig_status(
+        self, running: bool, lockstep: bool, fault_active: bool, record_time_s: float, step: int, now: float,
+        start_refused: bool = False,
+    ) -> bool:
+        """Send RIG_STATUS; ``record_time_s`` 0..1677 s, ``step`` is sent modulo 2**24; ``start_refused``: the last
+        start table was refused (the table already ran)."""
         values = self._v5
         values[0], values[1], values[2] = (1.0 if running else 0.0), (1.0 if lockstep else 0.0), (1.0 if fault_active else 0.0)
-        values[3], values[4] = record_time_s, step % STEP_INDEX_MODULO
+        # in the DBC's bit order: start_refused (bit 15) before record_time and step_index
+        values[3], values[4], values[5] = (1.0 if start_refused else 0.0), record_time_s, step % STEP_INDEX_MODULO
         return self.send_frame(self._rig, values, now)

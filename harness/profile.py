@@ -29,6 +29,7 @@ import copy
 import dataclasses
 import functools
 import hashlib
+import stat
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -157,12 +158,27 @@ class Profile:
                                    overlay_path=str(overlay.get("path", "")), overlay_sha256=str(overlay.get("sha256", "")))
 
 
-def _read_yaml(path: Path) -> dict:
+def _file_kind(path: Path) -> str:
+    """What ``path`` is when it is no regular file: "a directory", "a character device" ..., or "" if it does not exist."""
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return ""
+    kinds = ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"))
+    return next((name for test, name in kinds if test(mode)), "not a regular file")
+
+
+def _read_yaml(path: Path, what: str = "profile") -> dict:
+    """The mapping of the YAML file ``path``, a ``what`` ("profile" or "overlay"); refused with a ProfileError naming it."""
     source = str(path)
     if not path.is_file():
-        known = ", ".join(sorted(p.name for p in PROFILE_DIR.glob("*.yaml")))
-        state = "is a directory" if path.is_dir() else "profile file not found"
-        raise ProfileError(f"{state}; expected an existing YAML file (shipped profiles: {known})", source)
+        kind = _file_kind(path)
+        state = f"is {kind}, not a file" if kind else f"{what} file not found"
+        shipped = ""
+        if what == "profile":
+            shipped = " (shipped profiles: " + ", ".join(sorted(p.name for p in PROFILE_DIR.glob("*.yaml"))) + ")"
+        raise ProfileError(f"{state}; expected an existing YAML file{shipped}", source)
     try:
         size = path.stat().st_size
         if size > MAX_YAML_CHARS:
@@ -340,7 +356,7 @@ def load_profile(
 
 def _read_overlay(path: Path) -> tuple[dict, str]:
     """An overlay's keys and the SHA-256 of its bytes; refuses what only a profile may hold."""
-    data = _read_yaml(path)
+    data = _read_yaml(path, "overlay")
     for key in ("extends", "variants"):
         if key in data:
             raise ProfileError(f"an overlay holds values only; expected no {key!r} (put it in the profile)", str(path), key)

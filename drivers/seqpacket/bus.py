@@ -49,6 +49,16 @@ buffer asked for (:data:`SOCKET_BUFFER_BYTES`, which the kernel doubles) holds ~
 frames, over 1 s at 2500 frames/s, where ``net.core.wmem_max`` allows it (a warning is
 logged when the kernel grants less).
 
+Who may join
+------------
+Every connection is checked with the kernel's credentials of the other end (:mod:`.peers`):
+the hub closes a connection it accepted from a process its :class:`~.peers.PeerPolicy`
+refuses (another user, unless a member of ``peer_group``; any process but ``peer_pids`` when
+given) before reading or sending anything on it, and lists it in :attr:`SeqPacketBus.refused_peers`;
+a node that connected to a hub it refuses closes the connection and raises :class:`BusError`
+(when opening; later it stays alone and retries). Plain channel names live in this user's private
+directory, so no other user can bind one first (:mod:`.channel`).
+
 Channels are :mod:`drivers.seqpacket.channel`'s, the datagram of a frame is
 :mod:`drivers.seqpacket.wire`'s.
 """
@@ -65,13 +75,15 @@ import stat
 import threading
 import time
 from collections import deque
+from collections.abc import Collection
 from typing import Any
 
 import can
 from can import BusABC, CanOperationError, CanProtocol, Message
 
 from drivers.errors import BusError
-from drivers.seqpacket.channel import ABSTRACT_PREFIX, parse_channel
+from drivers.seqpacket.channel import ABSTRACT_PREFIX, check_directory, ensure_private_directory, parse_channel
+from drivers.seqpacket.peers import PeerPolicy
 from drivers.seqpacket.wire import HEADER, MAX_DATAGRAM_BYTES, decode_frame, encode_frame
 
 LOG = logging.getLogger(__name__)
@@ -88,6 +100,8 @@ RETRY_INTERVAL_S = 0.05
 ACCEPT_CHECK_INTERVAL_S = 0.01
 #: Pending connections the hub's listening socket holds before connects fail with EAGAIN.
 LISTEN_BACKLOG = 64
+#: Refused connections :attr:`SeqPacketBus.refused_peers` describes (later ones are only counted).
+MAX_REFUSALS_KEPT = 16
 
 _SEND_FLAGS = socket.MSG_DONTWAIT | socket.MSG_NOSIGNAL
 _RECV_FLAGS = socket.MSG_DONTWAIT
@@ -112,6 +126,10 @@ class SeqPacketBus(BusABC):
     socket_buffer_bytes : int
         ``SO_SNDBUF``/``SO_RCVBUF`` asked for each socket (bytes; the kernel doubles it, capped by
         ``net.core.wmem_max``/``rmem_max``).
+    peer_group : str or int, optional
+        A group (name or gid) whose members may join besides this user (``can.peer_group``).
+    peer_pids : collection of int, optional
+        The only processes that may be at the other end (a dry run and the rig process it started).
     **kwargs
         Other python-can arguments (``bitrate``, ...) are accepted and ignored.
 
@@ -125,11 +143,16 @@ class SeqPacketBus(BusABC):
         Frames the hub could not relay to a peer whose buffer was full.
     malformed_frames : int
         Datagrams received that were not a frame (wrong size); dropped.
+    refused_peers : list of str
+        Why each refused connection was refused (the first :data:`MAX_REFUSALS_KEPT`).
+    refused_count : int
+        Connections refused, all of them.
 
     Raises
     ------
     BusError
-        Unusable channel name, or the address can be neither connected to nor bound.
+        Unusable channel name, an unsafe directory, a hub this node refuses (another user, or not
+        the expected process), or the address can be neither connected to nor bound.
 
     Notes
     -----
@@ -144,9 +167,14 @@ class SeqPacketBus(BusABC):
         receive_own_messages: bool = False,
         fd: bool = False,
         socket_buffer_bytes: int = SOCKET_BUFFER_BYTES,
+        peer_group: str | int | None = None,
+        peer_pids: Collection[int] | None = None,
         **kwargs: Any,
     ) -> None:
         self._addr = parse_channel(channel)
+        self._policy = PeerPolicy.make(peer_group, peer_pids)
+        self.refused_peers: list[str] = []
+        self.refused_count = 0
         self.channel = channel
         self.receive_own_messages = bool(receive_own_messages)
         self._can_protocol = CanProtocol.CAN_FD if fd else CanProtocol.CAN_20
@@ -468,6 +496,7 @@ class SeqPacketBus(BusABC):
             if self._addr.path is None:
                 self._join_abstract()
             else:
+                self._check_directory()
                 with _DirectoryLock(self._addr.path):
                     self._join_path()
         except BusError:
@@ -478,6 +507,25 @@ class SeqPacketBus(BusABC):
             if initial:
                 raise BusError(f"cannot open seqpacket channel {self.channel!r} ({self._describe()}): {err}") from err
             LOG.debug("seqpacket: rejoining %r failed: %s", self.channel, err)
+
+    def _check_directory(self) -> None:
+        """Make the private directory, or check a socket path's directory (raises BusError)."""
+        assert self._addr.path is not None
+        directory = os.path.dirname(self._addr.path) or "."
+        if self._addr.private:
+            ensure_private_directory(directory)
+        else:
+            check_directory(directory, self._policy.group_gid)
+
+    def _refuse(self, sock: socket.socket, reason: str, role: str) -> str:
+        """Close ``sock`` (a connection refused by the peer check), note why, and return the note."""
+        note = f"refused {role} on seqpacket channel {self.channel!r}: {reason}"
+        self.refused_count += 1
+        if len(self.refused_peers) < MAX_REFUSALS_KEPT:
+            self.refused_peers.append(note)
+            LOG.warning("seqpacket: %s", note)
+        sock.close()
+        return note
 
     def _join_abstract(self) -> None:
         for _ in range(3):  # a node that lost the race to bind connects to the winner
@@ -512,6 +560,9 @@ class SeqPacketBus(BusABC):
                 LOG.warning("seqpacket: the hub of %r is not accepting; retrying", self.channel)
                 return True
             raise
+        refusal = self._policy.check(sock)
+        if refusal:  # a hub this node does not trust: never send it a frame
+            raise BusError(self._refuse(sock, refusal, "the hub") + "; nothing was sent to it")
         self._add_peer(sock)
         return True
 
@@ -525,6 +576,8 @@ class SeqPacketBus(BusABC):
             if err.errno == errno.EADDRINUSE:
                 return False
             raise
+        if self._addr.path is not None:  # before listen: nobody can connect yet; the directory guards the window
+            os.chmod(self._addr.path, 0o600 if self._policy.group_gid is None else 0o660)
         listener.listen(LISTEN_BACKLOG)
         listener.setblocking(False)
         if self._addr.path is not None:
@@ -559,6 +612,10 @@ class SeqPacketBus(BusABC):
             except OSError as err:  # ECONNABORTED etc.: that connection is gone
                 LOG.debug("seqpacket: accept on %r failed: %s", self.channel, err)
                 break
+            refusal = self._policy.check(sock)
+            if refusal:  # closed before anything is read from it or sent to it
+                self._refuse(sock, refusal, "a connection")
+                continue
             sock.setblocking(False)
             self._size_buffers(sock)
             self._add_peer(sock)

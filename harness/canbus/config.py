@@ -89,6 +89,10 @@ class CanConfig:
         Upper bound of frames one ``poll`` handles, so a flooded bus cannot stall a tick.
     dbc_path : str
         DBC file; empty means the packaged ``drivers/rig.dbc``.
+    peer_group : str
+        ``seqpacket`` interface only: a group whose members may join the channel besides this
+        user (checked on every connection with the peer's kernel credentials; docs/SAFETY.md,
+        "Threat model"). Empty, the default: this user alone.
     """
 
     interface: str = quantity("virtual", doc="python-can interface (virtual, socketcan, pcan, kvaser, ...)")
@@ -114,6 +118,7 @@ class CanConfig:
     timestamp_source: Literal["poll", "message"] = quantity("poll", doc="receive time: poll's now, or msg.timestamp")
     max_frames_per_poll: int = quantity(256, gt=0, doc="frames one poll handles at most")
     dbc_path: str = quantity("", doc="DBC file; empty = packaged drivers/rig.dbc")
+    peer_group: str = quantity("", doc="seqpacket: a group whose members may join besides this user; empty = this user only")
 
     def __post_init__(self) -> None:
         if not self.interface.strip():

@@ -8,6 +8,7 @@ into them. The functions keep the names and the order of checks of the drivers' 
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import Any
 
 from drivers import link
@@ -28,21 +29,42 @@ def protocol_arguments(config: CanConfig) -> dict[str, Any]:
     }
 
 
-def link_arguments(config: CanConfig) -> dict[str, Any]:
-    """Keyword arguments of :func:`drivers.link.open_rig` for ``config`` (the bus and its checks)."""
+#: The python-can interface whose bus checks its peers' credentials (drivers/seqpacket/).
+PEER_CHECKED_INTERFACE = "seqpacket"
+
+
+def bus_options(config: CanConfig, peer_pids: Collection[int] | None = None) -> dict[str, Any]:
+    """The bus's own keyword arguments: on ``seqpacket``, who may join (``can.peer_group``, ``peer_pids``).
+
+    Other interfaces get none: their access is the operating system's (a SocketCAN interface, an adapter).
+    """
+    if config.interface != PEER_CHECKED_INTERFACE:
+        return {}
+    options: dict[str, Any] = {"peer_group": config.peer_group or None}
+    if peer_pids:
+        options["peer_pids"] = tuple(peer_pids)
+    return options
+
+
+def link_arguments(config: CanConfig, peer_pids: Collection[int] | None = None) -> dict[str, Any]:
+    """Keyword arguments of :func:`drivers.link.open_rig` for ``config`` (the bus and its checks).
+
+    ``peer_pids``: the only processes that may be at the other end of a ``seqpacket`` channel.
+    """
     return {
         "interface": config.interface,
         "channel": config.channel,
         "bitrate_bps": config.bitrate_bps,
         "rates_hz": config.rates_hz(),
+        "bus_options": bus_options(config, peer_pids),
         **protocol_arguments(config),
     }
 
 
-def harness_link_arguments(config: CanConfig) -> dict[str, Any]:
+def harness_link_arguments(config: CanConfig, peer_pids: Collection[int] | None = None) -> dict[str, Any]:
     """Keyword arguments of :func:`drivers.link.open_harness` for ``config``: those of the rig, and the reader's."""
     return {
-        **link_arguments(config),
+        **link_arguments(config, peer_pids),
         "use_msg_timestamp": config.timestamp_source == "message",
         "max_frames_per_poll": config.max_frames_per_poll,
     }
@@ -61,8 +83,10 @@ def prepare(config: CanConfig) -> tuple[Protocol, BusLoad]:
     return link.prepare(config.rates_hz(), config.bitrate_bps, **protocol_arguments(config))
 
 
-def open_harness(config: CanConfig) -> HarnessLink:
+def open_harness(config: CanConfig, peer_pids: Collection[int] | None = None) -> HarnessLink:
     """Check the configuration, then open the bus for the harness side.
+
+    ``peer_pids``: on ``seqpacket``, the only processes admitted at the other end (the rig a dry run started).
 
     Raises
     ------
@@ -71,9 +95,9 @@ def open_harness(config: CanConfig) -> HarnessLink:
     BusError
         The bus cannot be opened (says how to fix it).
     """
-    return link.open_harness(**harness_link_arguments(config))
+    return link.open_harness(**harness_link_arguments(config, peer_pids))
 
 
-def open_rig(config: CanConfig) -> RigLink:
-    """Check the configuration, then open the bus for the rig side (the virtual rig); raises as :func:`open_harness`."""
-    return link.open_rig(**link_arguments(config))
+def open_rig(config: CanConfig, peer_pids: Collection[int] | None = None) -> RigLink:
+    """Check the configuration, then open the bus for the rig side (the virtual rig); as :func:`open_harness`."""
+    return link.open_rig(**link_arguments(config, peer_pids))

@@ -26,7 +26,9 @@ from harness.commands.options import (
     wrap,
 )
 from harness.commands.output import (
+    command_console,
     compile_kernels,
+    print_always,
     print_host_timing,
     print_outcome,
     print_timing,
@@ -84,8 +86,9 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.runs.options import resolve_profile
 
     if args.reset_drive and not args.external_rig:
-        console.print("[bold red]error:[/] --reset-drive resets the drive of a rig that already serves the channel: "
-                      "add --external-rig (a rig this command starts has a fresh drive)", highlight=False)
+        command_console(stderr=True).print(  # an error: on standard error, and never silenced by --quiet
+            "[bold red]error:[/] --reset-drive resets the drive of a rig that already serves the channel: "
+            "add --external-rig (a rig this command starts has a fresh drive)", highlight=False, soft_wrap=True)
         return exit_codes.INPUT_ERROR
     profile = load_acknowledged(args, console)
     study = study_options(args, controller=args.controller, rate_hz=args.rate)
@@ -128,4 +131,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     print_outcome(console, session, virtual_rig=not options.external_rig, weakened=profile.safety_weakened)
     if result.truth_note:
         console.print(f"  [yellow]{escape(result.truth_note)}[/]", highlight=False)
+    if result.table_refused:  # the rig answered the start with a refusal: the run did not test this record
+        print_always(console, f"[bold red]warning:[/] {escape(result.table_refused)}", highlight=False, soft_wrap=True)
+        return exit_codes.STOPPED if session.exit_code == exit_codes.OK else session.exit_code
     return session.exit_code

@@ -14,9 +14,9 @@ from harness.commands.options import (
     SEED,
     add_bus_options,
     add_profile_options,
+    add_result_folder,
     load_acknowledged,
     number_in,
-    output_dir,
     wrap,
 )
 from harness.commands.output import compile_kernels, print_host_timing, print_outcome, print_timing
@@ -36,9 +36,9 @@ BAND_FREQUENCY = limits.NumberRange(0.0, limits.MAX_RATE_HZ / 2, "Hz")
 EXAMPLES = """\
 examples:
   harness identify actuator --out frf/ --duration 20              (virtual rig, free, lockstep)
-  harness identify actuator --out frf/ --both --amplitude-N 1500 --band-hz 0.5,40
-  harness identify actuator nceer_4dof --out frf/ --signal random --seed 3 --duration 60
-  harness identify actuator profiles/my_rig.yaml --interface socketcan --channel can0 --blocked --out frf/
+  harness identify actuator --out frf_both/ --both --amplitude-N 1500 --band-hz 0.5,40
+  harness identify actuator nceer_4dof --out frf_random/ --signal random --seed 3 --duration 60
+  harness identify actuator profiles/my_rig.yaml --interface socketcan --channel can0 --blocked --out frf_rig/
 
 DIR gets frf.csv (free) and frf_blocked.csv (blocked): freq_hz,magnitude,phase_deg,coherence
 within the band, frf_velocity.csv (free: command to sliding velocity), frf.png (the Bode plot
@@ -48,6 +48,8 @@ data determine: force loop bandwidth, valve bandwidth, with a free condition the
 with a band reaching half the valve's frequency the delay), identification.json (values,
 standard errors, fit error in % and deg, what was held and why) and actuator_fit.png.
 Both conditions and a band past the force loop give the most: --both --band-hz 1,80 --amplitude-N 700.
+A DIR that holds an earlier identification's results is refused before anything moves (exit 2)
+unless --force, which removes them first: every response in DIR, and in the fit, is this run's.
 """
 
 
@@ -88,8 +90,7 @@ def add_parser(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_profile_options(parser, "profile YAML (default: profiles/nceer_4dof.yaml)")
-    parser.add_argument("--out", required=True, type=output_dir, metavar="DIR",
-                        help="where the estimate, the plot, excitation.json and the run folders go (created if missing)")
+    add_result_folder(parser, "the estimate, the plot, excitation.json, the fit and the run folders")
     signal = parser.add_argument_group("excitation")
     signal.add_argument("--signal", choices=SIGNALS, default=default.signal,
                         help=f"logarithmic chirp or band-limited Gaussian noise (default: {default.signal})")
@@ -141,14 +142,16 @@ def run(args: argparse.Namespace, console: Console) -> int:
 
     external = bool(args.interface or args.channel)
     if args.both and external and args.yes:
-        raise ProfileError("on a real rig the lab clamps the base mat between the two conditions; run --blocked and the "
-                           "free condition one at a time, or drop --yes to be asked before each", key_path="--both")
+        raise ProfileError("on a real rig the lab clamps the base mat between the two conditions; drop --yes to be asked "
+                           "before each (or run --blocked and the free condition one at a time, each into its own --out)",
+                           key_path="--both")
     profile = load_acknowledged(args, console)
     excitation = Excitation(args.signal, args.amplitude_N, tuple(args.band_hz), args.duration, args.seed, args.resolution_hz)
     conditions: tuple[Condition, ...] = ("free", "blocked") if args.both else ("blocked",) if args.blocked else ("free",)
     options = IdentifyOptions(
         excitation=excitation, out_dir=Path(args.out), conditions=conditions, interface=args.interface,
         channel=args.channel, external_rig=external, lockstep=not args.realtime, show_console=not args.quiet,
+        force=args.force,
     )
     compile_kernels(console)
     can = profile.can_settings(args.interface, args.channel)

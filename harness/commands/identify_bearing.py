@@ -60,7 +60,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.model.warmup import warm_up
 
     warm_up()
-    result = identify_bearing(args.runs, Path(args.out), args.lowpass_hz)
+    result = identify_bearing(args.runs, Path(args.out), args.lowpass_hz, args.force)
     fit = result.fit
     console.print(f"bearing friction from {len(result.runs)} run(s), {result.building.total_weight_N / 1e3:.4g} kN carried:",
                   highlight=False)

@@ -60,7 +60,8 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.model.warmup import warm_up
 
     warm_up()
-    result = identify_structure(args.runs, Path(args.out), None if args.band_hz is None else tuple(args.band_hz), args.damping)
+    result = identify_structure(args.runs, Path(args.out), None if args.band_hz is None else tuple(args.band_hz), args.damping,
+                                args.force)
     modal, stories = result.modal, result.stories
     story_hz, story_zeta = stories.modes()
     console.print(f"structure from {len(result.runs)} run(s), band {result.band_hz[0]:.3g}-{result.band_hz[1]:.3g} Hz:",

@@ -19,7 +19,8 @@ EXIT_STATUS = """\
 exit status:
   0  completed            3  tripped safely (force zeroed, drive disabled), or
   1  internal error (bug)     completed but the record was lost (repeat the test)
-  2  bad input or refused configuration, before anything moved
+  2  bad input or refused configuration, before this command moved anything
+     (a table an external rig already runs is refused, and said so)
   4  stopped early (safe stop) by the operator, or by a check (e.g. the table
      not playing the told record)
 """
@@ -199,6 +200,34 @@ def json_file(text: str) -> str:
     return text if text == STDOUT else output_file(text)
 
 
+#: ``--force`` of a command writing ``--json``.
+JSON_FORCE_HELP = "overwrite an existing --json file (without it an existing file is refused, exit 2)"
+
+
+def check_json_target(text: str | None, force: bool) -> None:
+    """Refuse a ``--json`` file that exists, unless ``force``; and any file in a run folder, whatever ``force``.
+
+    A run folder (a folder holding ``metadata.json``) is a record: a JSON document written over
+    its ``metadata.json`` would leave a folder no command can read.
+
+    Raises
+    ------
+    ProfileError
+        Naming ``--json``, the file and what was expected (exit status 2, before the command computes anything).
+    """
+    from harness.errors import ProfileError
+    from harness.recording.layout import METADATA_FILE
+
+    if text is None or text == STDOUT:
+        return
+    path = Path(text).expanduser()
+    if (path.parent / METADATA_FILE).is_file():
+        raise ProfileError(f"{text} is in the run folder {path.parent}, expected a file outside any run folder (a run's "
+                           "files are its record and are never overwritten)", key_path="--json")
+    if path.exists() and not force:
+        raise ProfileError(f"{text} exists, expected a new file (or --force to overwrite it)", key_path="--json")
+
+
 def output_dir(text: str) -> str:
     """An argparse ``type=`` for a directory the command writes into (created if missing): writable, not a file.
 
@@ -249,11 +278,23 @@ def add_overrides(parser: argparse.ArgumentParser, example: str) -> None:
     )
 
 
-def add_run_folders(parser: argparse.ArgumentParser, outputs: str) -> None:
-    """``RUN [RUN ...]`` and ``--out DIR``: an identification from run folders, writing ``outputs`` to DIR."""
-    parser.add_argument("runs", nargs="+", metavar="RUN", help="run folders (each holding metadata.json)")
+#: ``--force`` of a command writing a result folder (harness/identification/outputs.py, ``claim_result_folder``).
+RESULT_FORCE_HELP = ("replace the results an earlier identification left in DIR (they are removed first, so none is mixed "
+                     "with this run's); without it such a DIR is refused, exit 2")
+
+
+def add_result_folder(parser: argparse.ArgumentParser, outputs: str) -> None:
+    """``--out DIR`` and ``--force``: the result folder of an identification, writing ``outputs`` to DIR."""
     parser.add_argument("--out", required=True, type=output_dir, metavar="DIR",
                         help=f"where {outputs} go (created if missing)")
+    parser.add_argument("--force", action="store_true", help=RESULT_FORCE_HELP)
+
+
+def add_run_folders(parser: argparse.ArgumentParser, outputs: str) -> None:
+    """``RUN [RUN ...]``, ``--out DIR`` and ``--force``: an identification from run folders, writing ``outputs`` to DIR."""
+    parser.add_argument("runs", nargs="+", metavar="RUN",
+                        help="run folders (each holding metadata.json; each once, none whose outcome is incomplete)")
+    add_result_folder(parser, outputs)
 
 
 def add_profile_argument(parser: argparse.ArgumentParser, default_help: str) -> None:

@@ -116,8 +116,9 @@ def print_timing(console: Console, timing: dict, rate_hz: float) -> None:
     )
     if "stall_budget_s" in timing and not timing.get("lockstep", False):
         console.print(
-            f"stalls ridden through {timing['stalls_ridden_through']}, longest gap between ticks "
-            f"{timing['longest_stall_s'] * 1e3:.1f} ms (stall budget {timing['stall_budget_s'] * 1e3:.1f} ms)"
+            f"stalls ridden through {timing['stalls_ridden_through']}, past the budget {timing.get('gaps_past_budget', 0)} "
+            f"(each a stall_past_budget event), longest gap between ticks {timing['longest_stall_s'] * 1e3:.1f} ms "
+            f"(stall budget {timing['stall_budget_s'] * 1e3:.1f} ms)"
         )
 
 

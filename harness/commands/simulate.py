@@ -14,12 +14,14 @@ from rich.markup import escape
 from harness import exit_codes
 from harness.commands.options import (
     DELAY,
+    JSON_FORCE_HELP,
     RATE,
     SIMULATE_EPILOG,
     STIFFNESS_SCALE,
     add_overrides,
     add_profile_argument,
     add_record_options,
+    check_json_target,
     check_run_length,
     json_file,
     non_empty,
@@ -78,6 +80,7 @@ def add_parser(sub) -> None:
     output.add_argument("--json", type=json_file, metavar="PATH",
                         help="write peaks and record facts as JSON (SI units); '-' writes it to standard output (and the "
                         "rest to standard error)")
+    output.add_argument("--force", action="store_true", help=JSON_FORCE_HELP)
     output.add_argument("--out", type=output_dir, metavar="DIR", help="save both cases' time series as run folders in DIR")
     output.add_argument("--label", type=non_empty, metavar="TEXT",
                         help="label of this study in reports (default: made from what differs between the runs compared)")
@@ -97,6 +100,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.runs.simulate_batch import split_list
 
     console = json_console(console, args.json)
+    check_json_target(args.json, args.force)
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides, overlay=args.overlay)
     check_run_length(profile, args)
     records, controllers = split_list(args.record), split_list(args.controller)

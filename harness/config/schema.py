@@ -98,7 +98,7 @@ def _expected_range(meta: Mapping[str, Any], unit: str | None) -> str:
     for key in _RANGE_KEYS:
         if meta.get(key) is not None:
             parts.append(f"{symbols[key]} {meta[key]:g}")
-    suffix = f" {unit}" if unit else ""
+    suffix = f" {unit}" if unit and unit != "1" else ""  # "1": a ratio, which has no unit to name ("<= 1", not "<= 1 1")
     return " and ".join(parts) + suffix
 
 

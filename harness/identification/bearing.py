@@ -22,14 +22,21 @@ import numpy as np
 from harness.identification import friction_fit as ff
 from harness.identification.bearing_plot import friction_plot
 from harness.identification.force_balance import friction_from_balance
-from harness.identification.outputs import OverlayValue, write_overlay, write_record
+from harness.identification.outputs import (
+    OVERLAY_FILE,
+    RECORD_FILE,
+    OverlayValue,
+    claim_result_folder,
+    write_overlay,
+    write_record,
+)
 from harness.identification.run_signals import (
     RunUsed,
     design_bearing,
+    distinct_runs_used,
     floor_columns,
     load_runs_checked,
     require_columns,
-    run_used,
     same_building,
     uniform_signals,
 )
@@ -39,6 +46,8 @@ from harness.recording import RunData
 from harness.signals import columns as layout
 
 PLOT_FILE = "friction.png"
+#: The files DIR gets (:func:`~harness.identification.outputs.claim_result_folder`).
+RESULT_FILES = (OVERLAY_FILE, RECORD_FILE, PLOT_FILE)
 PURPOSE = "the bearing's identification (the base mat's force balance, Eq. 1-2)"
 
 
@@ -114,23 +123,28 @@ def overlay_values(fit: ff.FrictionFit) -> list[OverlayValue]:
     return values
 
 
-def identify_bearing(paths: Sequence[Path | str], out_dir: Path, lowpass_hz: float = ff.LOWPASS_HZ) -> BearingIdentification:
+def identify_bearing(paths: Sequence[Path | str], out_dir: Path, lowpass_hz: float = ff.LOWPASS_HZ,
+                     force: bool = False) -> BearingIdentification:
     """Identify the friction law from the run folders ``paths``; write DIR's files.
+
+    ``force`` replaces the results of an earlier identification in ``out_dir`` (else refused).
 
     Raises
     ------
     RunFolderError
-        For a path that is not a run folder.
+        For a path that is not a run folder, or an ``out_dir`` holding earlier results without ``force``.
     IdentificationError
-        For a run without the columns needed, or runs of buildings with different masses.
+        For a run without the columns needed, an incomplete run, the same run twice, or runs of
+        buildings with different masses.
     """
     runs = load_runs_checked(paths)
     building = same_building(runs)
+    used = distinct_runs_used(runs)
+    claim_result_folder(out_dir, RESULT_FILES, force)
     records = [sliding_record(run, building) for run in runs]
     design = design_bearing(runs[0])
     fit = ff.fit_friction(records, design, building.total_weight_N, lowpass_hz)
     out_dir.mkdir(parents=True, exist_ok=True)
-    used = tuple(run_used(run) for run in runs)
     header = [
         f"harness identify bearing: the friction law (Eq. 3-5) from {len(runs)} run(s); identification.json has the details.",
         "A profile overlay: merged over a profile, these values replace its own (the identified rig is the design model).",

@@ -30,6 +30,7 @@ from scipy.signal import chirp
 
 from drivers.measurements import Measurements
 from harness.errors import HarnessError
+from harness.identification.frf import MIN_BAND_BINS
 from harness.safety.config import ForceConfig
 
 SignalKind = Literal["chirp", "random"]
@@ -222,11 +223,35 @@ def check_within_limits(
             f"to {largest_amplitude:.0f} N or the upper frequency of --band-hz to {highest_hz:.3g} Hz",
         )
     segment = excitation.segment_samples(rate_hz)
+    check_band_bins(excitation, segment, rate_hz)
     needed_s = (MIN_AVERAGES + 1) * segment / 2 / rate_hz  # MIN_AVERAGES segments at 50 % overlap
     if excitation.duration_s < needed_s:
         raise ExcitationError(
             "--duration", f"found {excitation.duration_s:g} s, expected at least {needed_s:.3g} s: {MIN_AVERAGES} Welch "
             f"averages of {segment} samples ({segment / rate_hz:.3g} s, --resolution-hz {excitation.resolution_hz:g})",
+        )
+
+
+def check_band_bins(excitation: Excitation, segment: int, rate_hz: float) -> None:
+    """Refuse a band that holds fewer than :data:`~harness.identification.frf.MIN_BAND_BINS` frequencies of the estimate.
+
+    The estimate has a frequency every ``rate_hz / segment`` Hz (the Welch segment's bins);
+    a band between two of them would be excited and then give nothing to fit or plot.
+
+    Raises
+    ------
+    ExcitationError
+        Naming ``--resolution-hz``, the frequencies the band holds and the resolution that would do.
+    """
+    freq_hz = np.fft.rfftfreq(segment, 1.0 / rate_hz)
+    inside = int(np.count_nonzero((freq_hz >= excitation.low_hz) & (freq_hz <= excitation.high_hz)))
+    if inside < MIN_BAND_BINS:
+        finest_hz = (excitation.high_hz - excitation.low_hz) / MIN_BAND_BINS
+        raise ExcitationError(
+            "--resolution-hz", f"found {excitation.resolution_hz:g} Hz: the estimate then has a frequency every "
+            f"{rate_hz / segment:.3g} Hz ({segment} samples a segment at {rate_hz:g} Hz), and --band-hz "
+            f"{excitation.low_hz:g},{excitation.high_hz:g} holds {inside} of them; expected at least {MIN_BAND_BINS} "
+            f"(a response to fit and plot, not a point): --resolution-hz {finest_hz:.3g} or finer, or a wider band",
         )
 
 

@@ -17,6 +17,10 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
+#: Fewest frequencies of an estimate within the band an identification accepts: a fit of a model's parameters,
+#: and a Bode plot, need a response over a band, not a point (the SPEC 7a fit frees up to five parameters, the
+#: structure's up to two per story; ten bins, each a complex value, leave every one of them overdetermined).
+MIN_BAND_BINS = 10
 #: The columns of ``frf.csv``: frequency (Hz), |H| (output unit per input unit), phase (deg, unwrapped), coherence (0..1).
 FRF_COLUMNS = ("freq_hz", "magnitude", "phase_deg", "coherence")
 

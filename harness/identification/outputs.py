@@ -10,20 +10,53 @@ the values; it is read back with any YAML reader.
 ``identification.json`` holds everything: each parameter with its standard error, whether the
 data determined it and why, the fit's error, the runs used (path and the SHA-256 of their
 ``signals.csv``), the settings, and the harness's version and git commit.
+
+A result folder holds the results of one identification only (:func:`claim_result_folder`):
+one that already holds an earlier identification's files is refused, as an existing run
+folder is (:class:`~harness.recording.layout.RunFolderError`), unless ``--force``, which
+removes them first, so no result of an earlier run is ever read or shown as this one's.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from harness.identification.run_signals import RunUsed
+from harness.recording.layout import RunFolderError
 from harness.recording.metadata import environment, write_json_atomic
 
 OVERLAY_FILE = "identified.yaml"
 RECORD_FILE = "identification.json"
+
+
+def claim_result_folder(out_dir: Path, result_files: Iterable[str], force: bool) -> None:
+    """Make ``out_dir`` this identification's own: refuse it if it holds earlier results, or with ``force`` remove them.
+
+    Parameters
+    ----------
+    out_dir : Path
+        DIR (it may not exist yet; it is not created here).
+    result_files : iterable of str
+        The names of the files the identification writes in DIR.
+    force : bool
+        ``--force``: remove those of them that are there instead of refusing.
+
+    Raises
+    ------
+    RunFolderError
+        Naming DIR and the earlier results in it, when ``force`` is False.
+    """
+    present = sorted({name for name in result_files if (out_dir / name).is_file()})
+    if present and not force:
+        raise RunFolderError(
+            f"already holds the results of an earlier identification ({', '.join(present)}); expected a new result "
+            "folder (another --out), or --force to replace them", str(out_dir),
+        )
+    for name in present:
+        (out_dir / name).unlink()
 
 
 @dataclass(frozen=True)
@@ -67,13 +100,19 @@ def overlay_text(header: Sequence[str], sections: Mapping[str, Sequence[OverlayV
 
     A section's name may be a dotted path (``rig.actuator.hydraulics.cylinder``): it is written
     nested, sharing the mappings it has in common with the sections before it. A section with
-    no value is written as a comment saying so, not as an empty mapping.
+    no value is written as a comment saying so, not as an empty mapping; when a section nested
+    in it has values, the comment says that only its own keys were not determined.
     """
     lines = [f"# {line}" if line else "#" for line in header]
     opened: list[str] = []
     for section, values in sections.items():
         if not values:
-            lines.append(f"# {section}: nothing determined (identification.json says why)")
+            nested = [inner for inner, held in sections.items() if held and inner.startswith(f"{section}.")]
+            if nested:
+                lines.append(f"# {section}: none of its own keys determined (identification.json says why); "
+                             f"the values below, in {', '.join(nested)}, are")
+            else:
+                lines.append(f"# {section}: nothing determined (identification.json says why)")
             continue
         path = section.split(".")
         shared = 0

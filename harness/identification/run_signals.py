@@ -81,19 +81,53 @@ def run_used(run: RunData) -> RunUsed:
 
 
 def load_runs_checked(paths: Iterable[Path | str]) -> list[RunData]:
-    """Read the run folders, in the order given.
+    """Read the run folders, in the order given, refusing any an identification must not use.
+
+    A run whose ``metadata.json`` still says ``incomplete`` never finished: the process that
+    recorded it died or was killed, so its rows end at a last flush nobody checked, and
+    nothing says what the rig was doing then.
 
     Raises
     ------
     RunFolderError
         For a path that is no run folder (missing, no ``metadata.json``, unknown format).
     IdentificationError
-        When no path is given.
+        When no path is given, or for a run whose outcome is ``incomplete``.
     """
     runs = [load_run(path) for path in paths]
     if not runs:
         raise IdentificationError("found no run folder, expected at least one RUN")
+    for run in runs:
+        if run.outcome == "incomplete":
+            raise IdentificationError(
+                f"run {run.path}: its outcome is 'incomplete' (the process that recorded it never finished it, so its "
+                "rows end wherever the recorder last wrote); expected a run that ended (completed, stopped or tripped)"
+            )
     return runs
+
+
+def distinct_runs_used(runs: Sequence[RunData]) -> tuple[RunUsed, ...]:
+    """What ``identification.json`` says of each run, refusing the same data given twice.
+
+    A copy of a run is no second measurement: fitted twice, its noise counts twice and the
+    standard errors shrink by the square root of two, so a fit that fails its quality gate on
+    one run would pass it on the run and its copy.
+
+    Raises
+    ------
+    IdentificationError
+        Naming both runs whose ``signals.csv`` have the same SHA-256.
+    """
+    used = tuple(run_used(run) for run in runs)
+    first: dict[str, RunUsed] = {}
+    for run in used:
+        earlier = first.setdefault(run.signals_sha256, run)
+        if earlier is not run:
+            raise IdentificationError(
+                f"runs {earlier.path} and {run.path}: the same signals.csv (SHA-256 {run.signals_sha256[:16]}...); "
+                "expected each run once (a copy is no second measurement: it would halve the fit's variance)"
+            )
+    return used
 
 
 def require_columns(run: RunData, needed: Mapping[str, str], purpose: str) -> None:
@@ -164,11 +198,20 @@ def uniform_signals(run: RunData, names: Iterable[str]) -> tuple[float, dict[str
     Raises
     ------
     IdentificationError
-        For a run of fewer than 16 rows, or whose times do not increase.
+        For a run of fewer than 16 rows, whose times do not increase, or with a value that is
+        not a finite number (NaN: not measured) in a column used.
     """
+    names = tuple(names)
     t = run[layout.TIME]
     if len(t) < 16:
         raise IdentificationError(f"run {run.path}: holds {len(t)} rows, expected at least 16")
+    for name in (layout.TIME, *names):
+        bad = np.flatnonzero(~np.isfinite(run[name]))
+        if len(bad):
+            raise IdentificationError(
+                f"run {run.path}: {name} is {run[name][bad[0]]} on {len(bad)} row(s), the first at line {bad[0] + 2} of "
+                "signals.csv; expected a number on every row (a row not measured cannot be fitted)"
+            )
     steps = np.diff(t)
     if np.any(steps <= 0.0):
         raise IdentificationError(f"run {run.path}: its times t_s do not increase at row {int(np.argmin(steps > 0)) + 2}")

@@ -24,15 +24,23 @@ from pathlib import Path
 import numpy as np
 
 from harness.identification.fit_statistics import relative_error
+from harness.identification.frf import MIN_BAND_BINS
 from harness.identification.modal_fit import ModalFit, fit_modes, modal_response
-from harness.identification.outputs import OverlayValue, write_overlay, write_record
+from harness.identification.outputs import (
+    OVERLAY_FILE,
+    RECORD_FILE,
+    OverlayValue,
+    claim_result_folder,
+    write_overlay,
+    write_record,
+)
 from harness.identification.run_signals import (
     IdentificationError,
     RunUsed,
+    distinct_runs_used,
     floor_columns,
     load_runs_checked,
     require_columns,
-    run_used,
     same_building,
     uniform_signals,
 )
@@ -56,6 +64,8 @@ from harness.recording import RunData
 from harness.signals import columns as layout
 
 PLOT_FILE = "frf.png"
+#: The files DIR gets (:func:`~harness.identification.outputs.claim_result_folder`).
+RESULT_FILES = (OVERLAY_FILE, RECORD_FILE, PLOT_FILE)
 PURPOSE = "the structure's identification (base mat in, floors out)"
 #: Resolution of the measured response (Hz): the plot's, and the starting fit's.
 RESOLUTION_HZ = 0.1
@@ -115,6 +125,36 @@ def structure_record(run: RunData, n_stories: int, band_hz: tuple[float, float] 
                                   f"frequency of its {rate_hz:g} Hz rows; expected at most {0.4 * rate_hz:g} Hz (--band-hz)")
     floors = [signals[layout.floor_acceleration(j)] for j in range(1, n_stories + 1)]
     return band_passed(run.path.name, rate_hz, signals[layout.BASE_ACCELERATION], floors, band), band
+
+
+def check_band_bins(measured: MeasuredResponse, band_hz: tuple[float, float], given: bool) -> None:
+    """Refuse a band holding fewer than :data:`~harness.identification.frf.MIN_BAND_BINS` frequencies of the measured response.
+
+    The response has a frequency every ``1 / segment`` Hz, and a segment is at most a quarter
+    of the shortest run (:func:`~harness.identification.structure_records.frf_estimate`).
+
+    Parameters
+    ----------
+    measured : MeasuredResponse
+    band_hz : tuple of float
+    given : bool
+        True if ``--band-hz`` set the band (else it is :func:`default_band`).
+
+    Raises
+    ------
+    IdentificationError
+        Naming the band, the frequencies it holds at the response's resolution and what would hold enough.
+    """
+    inside = int(np.count_nonzero((measured.freq_hz >= band_hz[0]) & (measured.freq_hz <= band_hz[1])))
+    if inside < MIN_BAND_BINS:
+        step_hz = float(measured.freq_hz[1] - measured.freq_hz[0])
+        band = f"--band-hz {band_hz[0]:g},{band_hz[1]:g}" if given else \
+            f"the default band {band_hz[0]:.3g}-{band_hz[1]:.3g} Hz (the design's modes)"
+        raise IdentificationError(
+            f"{band} holds {inside} frequencies of the measured response (one every {step_hz:.3g} Hz); expected at least "
+            f"{MIN_BAND_BINS}, a response to fit and not a point: a band at least {MIN_BAND_BINS * step_hz:.3g} Hz wide, "
+            "or longer runs (a segment is at most a quarter of the shortest run, so a longer run resolves finer)"
+        )
 
 
 def start_frequencies(measured: MeasuredResponse, design: BuildingConfig, band_hz: tuple[float, float]) -> np.ndarray:
@@ -207,7 +247,7 @@ def overlay_values(stories: StoryFit, modal: ModalFit, design: BuildingConfig, s
 
 
 def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tuple[float, float] | None = None,
-                       damping_model: DampingModel | None = None) -> StructureIdentification:
+                       damping_model: DampingModel | None = None, force: bool = False) -> StructureIdentification:
     """Identify the structure from the run folders ``paths``; write DIR's files.
 
     Parameters
@@ -218,6 +258,8 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
         The band (Hz); default :func:`default_band` of the first run.
     damping_model : {"per_story", "proportional"}, optional
         Default: the form the run's profile gives its damping in.
+    force : bool
+        Replace the results of an earlier identification in ``out_dir`` (else refused).
 
     Raises
     ------
@@ -225,6 +267,8 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
     """
     runs = load_runs_checked(paths)
     design = same_building(runs)
+    used = distinct_runs_used(runs)
+    claim_result_folder(out_dir, RESULT_FILES, force)
     records, bands = zip(*(structure_record(run, design.n_stories, band_hz, design) for run in runs), strict=True)
     band = bands[0]
     if len({round(r.rate_hz, 6) for r in records}) > 1:
@@ -232,11 +276,11 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
                                   "expected runs of one loop rate (identify each rate on its own)")
     model: DampingModel = damping_model or ("proportional" if design.first_mode_damping_ratio is not None else "per_story")
     measured = frf_estimate(records, RESOLUTION_HZ)
+    check_band_bins(measured, band, band_hz is not None)
     modal = fit_modes(records, [float(f) for f in start_frequencies(measured, design, band)])
     stories = fit_stories(records, design, modal.frequency_hz, float(modal.damping_ratio[0]), model)
     modes, stiffness, damping = _determinations(modal, stories, band)
     out_dir.mkdir(parents=True, exist_ok=True)
-    used = tuple(run_used(run) for run in runs)
     values = overlay_values(stories, modal, design, stiffness, damping)
     header = [
         f"harness identify structure: story stiffness and damping from {len(runs)} run(s) with the profile's masses; "

@@ -21,11 +21,12 @@ from harness.loop.config import LoopConfig
 from harness.loop.operator import OperatorSignals
 from harness.loop.status import LoopStatus
 from harness.loop.tick import ControlTick
-from harness.loop.timing import TimingStats
+from harness.loop.timing import PHASE, GapTrace, TimingStats
 from harness.realtime.host import Scheduling, apply_realtime, restore_realtime
 from harness.realtime.scheduler import FixedRateScheduler
 from harness.recording.layout import Outcome
 from harness.safety.lifecycle import State
+from harness.safety.operator_detectors import HOST_TIMING_REMEDIES
 from harness.safety.supervisor import SupervisedCommand
 
 _FINAL = (State.DONE, State.TRIPPED)
@@ -118,6 +119,13 @@ class ControlLoop:
         self.on_start = on_start or (lambda t: None)
         self.status = status or LoopStatus()
         self.scheduler = FixedRateScheduler(self.period_s, config.spin_s, clock=clock, sleep=sleep)
+        #: Where the time between two ticks went, on the scheduler's clock (the tick marks its parts in it).
+        self.trace = tick.trace = GapTrace(clock)
+        #: Gaps past the stall budget, in any phase (each recorded as a ``stall_past_budget`` event).
+        self.gaps_past_budget = 0
+        #: The latest gap past the budget: its length (s), and the loop time it ended (s); 0 when none.
+        self.last_gap_past_budget_s = 0.0
+        self.last_gap_past_budget_end_s = 0.0
         self.signals = OperatorSignals()
         #: Stalls ridden through (two periods or more between the starts of two ticks, within the budget).
         self.stalls = 0
@@ -129,6 +137,8 @@ class ControlLoop:
         self.missed_periods = 0
         #: The stall budget (s): ridden through up to here, tripped beyond (the supervisor's ``loop_stall``).
         self.max_stall_s = tick.supervisor.config.run.max_stall_s
+        #: The lifecycle state after the latest tick: the phase a gap that follows it begins in.
+        self._gap_state = State.IDLE
 
     def _phase(
         self, t: float, run_started: float | None, duration_s: float, armed_at: float | None
@@ -144,7 +154,7 @@ class ControlLoop:
                 armed_at = t
             except SafetyError as err:
                 if t >= self.config.arm_timeout_s:
-                    raise ArmTimeout(str(err), self.config.arm_timeout_s) from err
+                    raise ArmTimeout(str(err) + self._stall_note(), self.config.arm_timeout_s) from err
         elif state is State.ARMED:
             assert armed_at is not None, "ARMED only after arm() succeeded here"
             if t - armed_at >= self.config.settle_s:
@@ -190,13 +200,17 @@ class ControlLoop:
             self.tick.health.bus_gone = True  # the rig stopped answering: trips as bus_gone
         return k * self.period_s, 0.0
 
-    def _note_stall(self, t: float, stall_s: float) -> int:
-        """Count a stall the loop rides through; return the whole periods missed in it.
+    def _note_stall(self, t: float, stall_s: float, woke_s: float) -> int:
+        """Count a stall the loop rides through, record one past the budget; return the whole periods missed.
 
         A stall is a gap of two periods or more between the starts of two ticks (one or more
-        deadlines passed without a tick). Beyond the budget the supervisor trips
-        (``loop_stall``); within it the stall is counted, shown on the console and recorded
-        as a ``timing`` event. In lockstep (``stall_s`` 0) the rig waits for the loop.
+        deadlines passed without a tick). Within the budget the stall is counted, shown on the
+        console and recorded as a ``timing`` event ``stall_ridden_through``. Beyond it the
+        supervisor trips (``loop_stall``) where the drive may be enabled, and in every phase the
+        loop records a ``timing`` event ``stall_past_budget``: the gap's start and end (loop
+        time), the phase it began in and what the loop was doing through it (:class:`GapTrace`),
+        so every gap the console's "longest" counts is in the record (docs/SAFETY.md, "Stall
+        attribution"). In lockstep (``stall_s`` 0) the rig waits for the loop.
         """
         missed = int(stall_s / self.period_s + 1e-9) - 1
         if missed < 1:
@@ -210,7 +224,25 @@ class ControlLoop:
                 f"{stall_s * 1e3:.1f} ms between two ticks ({missed} missed periods), within the "
                 f"{self.max_stall_s * 1e3:.1f} ms stall budget",
             )
+        else:
+            self.gaps_past_budget += 1
+            self.last_gap_past_budget_s = stall_s
+            self.last_gap_past_budget_end_s = t
+            self.tick.supervisor.events.push(
+                t, "timing", "stall_past_budget",
+                f"{stall_s * 1e3:.1f} ms between two ticks ({missed} missed periods), past the "
+                f"{self.max_stall_s * 1e3:.1f} ms stall budget: from {woke_s - stall_s:.4f} s to {woke_s:.4f} s "
+                f"(loop time), begun in {self._gap_state.name}; {self.trace.describe()}",
+            )
         return missed
+
+    def _stall_note(self) -> str:
+        """For a refusal to arm: the latest gap past the budget, which a drive's watchdog fault may follow ("" if none)."""
+        if not self.gaps_past_budget:
+            return ""
+        return (f"; the loop itself stalled {self.last_gap_past_budget_s * 1e3:.1f} ms up to t = "
+                f"{self.last_gap_past_budget_end_s:.3f} s, past its {self.max_stall_s * 1e3:.1f} ms stall budget "
+                "(a drive's watchdog fault after it is the stall's): " + HOST_TIMING_REMEDIES)
 
     def run(self) -> LoopResult:
         """Run the whole test: arm, settle, the record, the tail, the ramp-down."""
@@ -220,7 +252,7 @@ class ControlLoop:
         if scheduling is None and self.lockstep is not None:  # lockstep asks for nothing: recorded as normal scheduling
             scheduling = Scheduling(self.config.realtime.fifo_priority)
         report = apply_realtime(self.config.realtime, scheduling)
-        tick, health = self.tick, self.tick.health
+        tick, health, trace = self.tick, self.tick.health, self.trace
         run_started = armed_at = None
         finished_at = None
         outcome: Outcome = "error"
@@ -235,12 +267,13 @@ class ControlLoop:
             try:
                 while True:
                     t, lateness = self._wait(k)
+                    trace.woke()
                     dt = t - previous_t  # a whole period, or more after deadlines were skipped
                     previous_t = t
                     woke = t + lateness  # when this tick really began (s, loop clock)
                     stall_s = 0.0 if previous_woke is None or self.lockstep is not None else woke - previous_woke
                     previous_woke = woke
-                    missed = self._note_stall(t, stall_s)
+                    missed = self._note_stall(t, stall_s, woke)
                     health.operator_stop = self.signals.stop_requested
                     health.operator_trip = self.signals.trip_requested
                     health.record_time_s = t - run_started if run_started is not None and not self._awaiting_table else math.nan
@@ -248,6 +281,8 @@ class ControlLoop:
                     timing.add(lateness, tick.compute_s, tick.cpu_s)
                     run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
                     self._update_status(t, run_started, duration_s, command, lateness)
+                    self._gap_state = command.state  # the phase the next gap begins in
+                    trace.mark(PHASE)
                     k += 1
                     if finished and finished_at is None:
                         finished_at = t
@@ -278,6 +313,7 @@ class ControlLoop:
             trip_detail=supervisor.stop_detail if stopped_by_check else supervisor.trip_detail,
             timing={**timing.summary(), "threads": threads, "stalls_ridden_through": self.stalls,
                     "longest_stall_s": self.longest_stall_s, "stall_budget_s": self.max_stall_s,
+                    "gaps_past_budget": self.gaps_past_budget,
                     "lockstep": self.lockstep is not None},
             realtime_report=report.lines,
             scheduling=report.scheduling.as_dict(),
@@ -317,6 +353,7 @@ class ControlLoop:
         status.error_frames = health.error_frames
         status.send_failures = health.send_failures
         status.stalls = self.stalls
+        status.gaps_past_budget = self.gaps_past_budget
         status.longest_stall_s = self.longest_stall_s
         status.missed_periods = self.missed_periods
         status.last_event = tick.last_event

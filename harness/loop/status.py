@@ -49,6 +49,7 @@ class LoopStatus(StatusBlock):
     error_frames = IntField("CAN error frames seen")
     send_failures = IntField("frames that could not be sent")
     stalls = IntField("stalls ridden through (two periods or more between two ticks' starts, within budget)")
+    gaps_past_budget = IntField("gaps between two ticks' starts longer than the stall budget, in any phase (each an event)")
     longest_stall_s = FloatField("longest time between the starts of two consecutive ticks in a stall (s)")
     missed_periods = IntField("whole periods missed in stalls (the gaps between two ticks' starts), in total")
     fault_code = IntField("the servo's fault code in the latest ACTUATOR_STATUS (drivers.protocol_values.FaultCode); 0 none")

@@ -20,6 +20,7 @@ from harness.control.compensation import Compensator, NoCompensation, compensate
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
+from harness.loop.timing import CONTROL, READ, RECORD, SUPERVISE, WRITE, GapTrace
 from harness.loop.trip_outputs import TripOutputs
 from harness.realtime.memory import float_view
 from harness.safety.checks import bit
@@ -139,6 +140,8 @@ class ControlTick:
         #: ``compute_s`` column and the loop's timing statistics both take this one measurement.
         self.compute_s = 0.0
         self.cpu_s = 0.0
+        #: When each part of the latest tick ended (the loop gives it its own clock): where a long gap went.
+        self.trace = GapTrace()
         self.command: SupervisedCommand = supervisor.command
         reader = self.reader
         self._table, self._base, self._status = reader.table, reader.base, reader.status
@@ -181,6 +184,7 @@ class ControlTick:
         health.foreign_command = self.reader.foreign_command_seen
         health.drive_ready = self.reader.drive_ready
         health.drive_fault = self.reader.drive_fault
+        health.drive_fault_code = self.reader.fault_code
         health.pressure_ok = self.reader.pressure_ok
         health.actuator_status_age_s = status.age(now)
         # the load cell: the supervisor's tracking check, and the actuator-aware designs' force state
@@ -203,17 +207,21 @@ class ControlTick:
         ``poll=False`` when the caller has already polled the bus this tick (lockstep).
         """
         started, cpu_started = time.perf_counter(), time.thread_time()
-        supervisor = self.supervisor
+        supervisor, trace = self.supervisor, self.trace
         friction = raw = math.nan
         try:
             self.read(now, stall_s, missed_periods, poll)
+            trace.mark(READ)
             friction = self.estimator.update(t, dt, self.meas.sliding_velocity_m_s)
             raw = self.controller.update(t, dt, self.meas, friction, None)
-            command = supervisor.update(t, dt, self.health, compensate(self.compensator, t, dt, raw, self.meas, self.command,
-                                                                      self.health))
+            force = compensate(self.compensator, t, dt, raw, self.meas, self.command, self.health)
+            trace.mark(CONTROL)
+            command = supervisor.update(t, dt, self.health, force)
         except Exception as exc:  # noqa: BLE001 - any failure in the tick trips; it never kills the process
             command = supervisor.report_exception(t, exc)
+        trace.mark(SUPERVISE)
         self.write(t, command, now)
+        trace.mark(WRITE)
         self.ticks += 1
         try:
             try:
@@ -229,6 +237,7 @@ class ControlTick:
         except Exception as exc:  # noqa: BLE001 - a fault in our own recording code: trip now, zero sent at once
             command = supervisor.report_exception(t, exc)
             self.send_disable(now)
+        trace.mark(RECORD)
         return command
 
     def write(self, t: float, command: SupervisedCommand, now: float) -> None:

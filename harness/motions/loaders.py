@@ -55,6 +55,23 @@ _TIME_NAMES = ("t", "time", "sec", "seconds")
 
 Line = tuple[int, str]
 
+#: Most characters of a file's line an error message quotes: a file that is not a record (any readable
+#: file named by mistake, or on purpose) must not have its content copied into messages and results.
+EXCERPT_CHARS = 32
+
+
+def excerpt(text: str) -> str:
+    """``text`` quoted for an error message: at most :data:`EXCERPT_CHARS` characters, escaped to ASCII.
+
+    Non-printable and non-ASCII characters are escaped (``ascii()``), so the excerpt cannot
+    carry control sequences into a terminal, a log or ``cases.csv``; a longer line is cut and
+    says how much was left out.
+    """
+    if len(text) <= EXCERPT_CHARS:
+        return ascii(text)
+    return f"{ascii(text[:EXCERPT_CHARS])}... ({len(text) - EXCERPT_CHARS} more characters)"
+
+
 #: Largest record file read (bytes): a 600 s record at 200 Hz is about 2 MB of text; the cap
 #: bounds what one read allocates (and refuses a disk image given by mistake).
 MAX_RECORD_BYTES = 50_000_000
@@ -211,9 +228,9 @@ def _to_float(text: str, file: Path, lineno: int, what: str) -> float:
     try:
         value = float(text.replace("D", "E").replace("d", "e"))
     except ValueError as err:
-        raise RecordError(f"{file}:{lineno}: expected a number for {what}, found {text!r}") from err
+        raise RecordError(f"{file}:{lineno}: expected a number for {what}, found {excerpt(text)}") from err
     if not np.isfinite(value):
-        raise RecordError(f"{file}:{lineno}: {what} is {text!r}; expected a finite number")
+        raise RecordError(f"{file}:{lineno}: {what} is {excerpt(text)}; expected a finite number")
     return value
 
 
@@ -250,10 +267,10 @@ def _parse_at2(lines: Sequence[Line], file: Path, unit: str | None) -> tuple[flo
     lineno, header = lines[3]
     match = _AT2_NPTS_DT.search(header) or _AT2_OLD.match(header)
     if not match:
-        raise RecordError(f"{file}:{lineno}: expected an AT2 line like 'NPTS=  4000, DT= .01000 SEC', found {header!r}")
+        raise RecordError(f"{file}:{lineno}: expected an AT2 line like 'NPTS=  4000, DT= .01000 SEC', found {excerpt(header)}")
     units_line = lines[2][1].upper()
     if "UNITS OF" in units_line and not re.search(r"UNITS OF G\b", units_line):
-        raise RecordError(f"{file}:{lines[2][0]}: expected acceleration 'IN UNITS OF G', found {lines[2][1]!r}")
+        raise RecordError(f"{file}:{lines[2][0]}: expected acceleration 'IN UNITS OF G', found {excerpt(lines[2][1])}")
     npts = int(match.group(1))
     dt = _to_float(match.group(2), file, lineno, "DT")
     if dt <= 0:
@@ -295,23 +312,23 @@ def _parse_header(line: Line, file: Path) -> tuple[str | None, float]:
     names = _split(text)
     example = "expected a header like 't_s,accel_g' or 'time_s,acc_m_s2' (time, then acceleration)"
     if len(names) != 2:
-        raise RecordError(f"{file}:{lineno}: {example}, found {len(names)} columns: {text!r}")
+        raise RecordError(f"{file}:{lineno}: {example}, found {len(names)} columns: {excerpt(text)}")
     time_base, time_unit = split_column_name(names[0])
     accel_base, accel_unit = split_column_name(names[1])
     if time_base not in _TIME_NAMES or not (accel_base.startswith("a") or "acc" in accel_base):
-        raise RecordError(f"{file}:{lineno}: {example}, found {text!r}")
+        raise RecordError(f"{file}:{lineno}: {example}, found {excerpt(text)}")
     factor = 1.0
     if time_unit:
         found = time_factor(time_unit)
         if found is None:
-            raise RecordError(f"{file}:{lineno}: unknown time unit {time_unit!r} in {names[0]!r}; expected s or ms")
+            raise RecordError(f"{file}:{lineno}: unknown time unit {excerpt(time_unit)} in {excerpt(names[0])}; expected s or ms")
         factor = found
     if not accel_unit:
         return None, factor
     try:
         return normalize_accel_unit(accel_unit), factor
     except RecordError as err:
-        raise RecordError(f"{file}:{lineno}: column {names[1]!r}: {err}") from err
+        raise RecordError(f"{file}:{lineno}: column {excerpt(names[1])}: {err}") from err
 
 
 def _decide_unit(header_unit: str | None, given: str | None, file: Path) -> str:
@@ -335,7 +352,9 @@ def _parse_columns(body: Sequence[Line], file: Path, time_scale: float) -> tuple
         fields = _split(line)
         if len(fields) != 2:
             hint = "; a single column of values needs a 'dt=...' header line" if len(fields) == 1 else ""
-            raise RecordError(f"{file}:{number}: expected 2 values (time, acceleration), found {len(fields)}: {line!r}{hint}")
+            raise RecordError(
+                f"{file}:{number}: expected 2 values (time, acceleration), found {len(fields)}: {excerpt(line)}{hint}"
+            )
         times.append(_to_float(fields[0], file, number, "the time"))
         values.append(_to_float(fields[1], file, number, "the acceleration"))
         linenos.append(number)

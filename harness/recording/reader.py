@@ -22,7 +22,7 @@ from harness.recording.layout import (
     METADATA_FILE,
     RunFolderError,
 )
-from harness.signals.columns import count_stories
+from harness.signals.columns import SIMULATED_CONTROL, count_stories
 
 
 @dataclass(frozen=True)
@@ -284,7 +284,32 @@ def _read_signals(path: Path, metadata: Mapping[str, Any]) -> tuple[tuple[str, .
         raise RunFolderError(f"found {table.shape[1]} values per line, expected {width} (the header's columns)", str(path))
     _check_row_count(path, metadata, len(numbered))
     signals = {name: np.ascontiguousarray(table[:, i]) for i, name in enumerate(header)}
+    notes.extend(_non_finite_notes(path, signals, [number for number, _ in numbered]))
     return header, signals, notes
+
+
+def _non_finite_notes(path: Path, signals: Mapping[str, np.ndarray], line_numbers: list[int]) -> list[str]:
+    """One note naming the rows and columns of ``path`` holding NaN or Inf, if any (logs/README.md: "not measured").
+
+    The one place they belong is left out: a simulated case's controller internals in its last
+    row, where the controller took no sample (:func:`harness.runs.simulate_output.unsampled_end`).
+    """
+    rows: set[int] = set()
+    columns = []
+    for column, values in signals.items():
+        bad = ~np.isfinite(values)
+        if column in SIMULATED_CONTROL and len(bad):
+            bad[-1] = False
+        if bad.any():
+            columns.append(column)
+            rows.update(np.flatnonzero(bad).tolist())
+    if not columns:
+        return []
+    lines = sorted(line_numbers[row] for row in rows)
+    shown = ", ".join(str(line) for line in lines[:5]) + (", ..." if len(lines) > 5 else "")
+    listed = ", ".join(columns[:6]) + (f" and {len(columns) - 6} more" if len(columns) > 6 else "")
+    return [f"run {path.parent.name}: {len(lines)} row(s) of {path.name} hold NaN or Inf (line {shown}) in {listed}: "
+            "no measurement there (an identification refuses such a row)"]
 
 
 def _bad_row(numbered: list[tuple[int, str]], width: int) -> str:

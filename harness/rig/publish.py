@@ -134,11 +134,15 @@ class RigPublisher:
         self._clip(4)
         return self.send(4, values, now)
 
-    def rig_status(self, running: bool, lockstep: bool, fault_active: bool, record_time_s: float, step: int, now: float) -> bool:
-        """Send RIG_STATUS (target 5); ``step`` is sent modulo 2**24."""
+    def rig_status(
+        self, running: bool, lockstep: bool, fault_active: bool, record_time_s: float, step: int, now: float,
+        start_refused: bool = False,
+    ) -> bool:
+        """Send RIG_STATUS (target 5); ``step`` is sent modulo 2**24; ``start_refused``: the last start table was refused."""
         values = self._values[5]
         values[0], values[1], values[2] = (1.0 if running else 0.0), (1.0 if lockstep else 0.0), (1.0 if fault_active else 0.0)
-        values[3], values[4] = record_time_s, step % (1 << 24)
+        # in the DBC's bit order: start_refused (bit 15) before record_time and step_index
+        values[3], values[4], values[5] = (1.0 if start_refused else 0.0), record_time_s, step % (1 << 24)
         self._clip(5)
         return self.send(5, values, now)
 

@@ -54,11 +54,16 @@ from harness.rig.runner import serve
 from harness.rig.schedule import PublishSchedule
 from harness.rig.sensors import SIGNALS, SensorModel
 from harness.rig.table import TablePlant
+from harness.safety.lifecycle import State
 
 if TYPE_CHECKING:
     from drivers.link import RigLink
     from harness.motions import GroundMotion
     from harness.profile import Profile
+
+#: HEARTBEAT states of a harness whose run has ended: the table it started is held (``_stop_table_after_the_run``).
+RUN_ENDED_STATES = frozenset({int(State.DONE), int(State.TRIPPED)})
+
 
 class VirtualRig:
     """The 4-DOF rig on a CAN bus.
@@ -155,6 +160,8 @@ class VirtualRig:
         self.n = 0
         self.step_index = 0
         self.armed = False
+        #: The last RIG_CONTROL start table was refused (the table already ran): RIG_STATUS ``start_refused``.
+        self.start_refused = False
         self.force_N = 0.0
         self._t0: float | None = None
         self._announce = self.lockstep
@@ -295,7 +302,8 @@ class VirtualRig:
     def _publish_rig_status(self, now: float) -> None:
         table = self.table
         self.publisher.rig_status(
-            table.running, self.lockstep, self.faults.any_active, min(table.record_time_s, 1677.0), self.step_index, now
+            table.running, self.lockstep, self.faults.any_active, min(table.record_time_s, 1677.0), self.step_index, now,
+            self.start_refused,
         )
 
     def _publish_due(self, now: float) -> None:
@@ -321,7 +329,14 @@ class VirtualRig:
         if command == RigCommand.RESET:
             self._reset_rig()
             self.journal.note("rig reset (RIG_CONTROL): plant at rest, every latch cleared, drive OFF")
-        elif command == RigCommand.START_TABLE and not self.table.running and not self.armed:
+        elif command == RigCommand.START_TABLE and (self.table.running or self.armed):
+            # Answered, not ignored: RIG_STATUS start_refused until a stop, a reset or an accepted start.
+            if not self.start_refused:
+                self.journal.note(f"start table refused (RIG_CONTROL): the table already "
+                                  f"{'runs' if self.table.running else 'is armed to start'}; stop it first")
+            self.start_refused = True
+        elif command == RigCommand.START_TABLE:
+            self.start_refused = False
             if self.lockstep:
                 self.armed = True
             else:
@@ -329,6 +344,7 @@ class VirtualRig:
                 self.faults.reset_schedule()
         elif command == RigCommand.STOP_TABLE:
             self.armed = False
+            self.start_refused = False
             self.table.stop()
         self._update_faults()
         self._update_drive(now)
@@ -347,6 +363,7 @@ class VirtualRig:
         elif kind == rig_reader.HEARTBEAT:
             self._heard_harness = True
             self.drive.on_heartbeat(now, int(self.reader.heartbeat[0]))
+            self._stop_table_after_the_run()
             self._update_drive(now)
         elif kind == rig_reader.CONTROL:
             self._on_control(now)
@@ -355,6 +372,17 @@ class VirtualRig:
             self.drive.on_estop()
         elif kind == rig_reader.DRIVE_RESET:
             self._on_drive_reset(now)
+
+    def _stop_table_after_the_run(self) -> None:
+        """The harness's heartbeat says its run ended (DONE or TRIPPED): hold the table it started.
+
+        A table left running after its run would play on while the next harness waits idle, and
+        that harness's start would find it running (RIG_STATUS ``start_refused``).
+        """
+        if (self.table.running or self.armed) and self.drive.harness_state in RUN_ENDED_STATES:
+            self.armed = False
+            self.table.stop()
+            self.journal.note("table stopped: the harness's run ended")
 
     def _after_frames(self, now: float) -> None:
         self._update_faults()

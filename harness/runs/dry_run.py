@@ -18,6 +18,7 @@ import dataclasses
 import functools
 import json
 import os
+import secrets
 import subprocess
 import sys
 import time
@@ -54,6 +55,13 @@ from harness.simulation.twin import run_rig_twin
 #: process, on a Unix-socket bus that needs no set-up.
 PRIVATE_BUS_INTERFACE = "seqpacket"
 RIG_APPEAR_TIMEOUT_S = 60.0
+#: The dry run's report when the rig answered its table start with RIG_STATUS ``start_refused``.
+TABLE_START_REFUSED = (
+    "the rig refused this run's table start (RIG_STATUS start_refused: its table was already running), so the table "
+    "did not play this run's record; the peaks below are not this record's"
+)
+#: After this long without a RIG_STATUS frame from an external rig, say so, and how much longer the wait lasts (s).
+NO_RIG_NOTICE_S = 4.0
 IN_PROCESS_SWITCH_INTERVAL_S = 2e-4
 #: Frames the harness sends to bring the rig into lockstep, and to show it the command counter, before the run.
 #: The rig's E2E check rejects the first frame of a harness that follows another within its new-sender
@@ -90,6 +98,8 @@ class DryRunResult:
     motion: GroundMotion
     span_s: float | None = None  # record time covered by a run that ended early (s); None: the whole record
     truth_note: str = ""  # where the rig it served differs from the design (harness/rig/truth.py); "" when it does not
+    #: Why the table did not play this run's record (the rig refused its start); "" when it did.
+    table_refused: str = ""
 
     def largest_twin_difference(self) -> tuple[str, float]:
         """The peak that differs most from the simulated twin's, and by how much (% of the twin's).
@@ -108,7 +118,8 @@ def _rig_process(profile: Profile, can, lockstep: bool) -> subprocess.Popen:
 
     The rig gets the profile this dry run resolved (``--set``, ``--variant`` and every
     option folded in) as a JSON document on its standard input: it parses no options
-    of its own, so it cannot run a different profile from the loop's.
+    of its own, so it cannot run a different profile from the loop's. On a ``seqpacket``
+    channel it admits only this process at the other end (harness/runs/rig_process.py).
     """
     job = {"profile": profile.resolved_data(), "interface": can.interface, "channel": can.channel,
            "lockstep": lockstep, "parent_pid": os.getpid()}
@@ -137,13 +148,19 @@ class RigCoordinator:
     process : subprocess.Popen, optional
         The rig process this command started (to report why it died).
     appear_timeout_s : float
+    notify : callable, optional
+        ``notify(line)``: told when an external rig has not answered within :data:`NO_RIG_NOTICE_S`
+        (default: a line on standard error, which ``--quiet`` does not silence).
     """
 
     def __init__(
         self, lockstep: bool, period_s: float, process: subprocess.Popen | None = None,
-        appear_timeout_s: float = RIG_APPEAR_TIMEOUT_S,
+        appear_timeout_s: float = RIG_APPEAR_TIMEOUT_S, notify: Callable[[str], None] | None = None,
     ):
         self.lockstep = lockstep
+        self.notify = notify or _note_on_stderr
+        #: The rig process's id, the one peer the harness's side of a private channel admits; () for none.
+        self.peer_pids: tuple[int, ...] = () if process is None else (process.pid,)
         self.period_s = period_s
         self.process = process
         self.appear_timeout_s = appear_timeout_s
@@ -175,14 +192,52 @@ class RigCoordinator:
         )
 
     def on_link(self, link: HarnessLink) -> None:
-        """Wait for the rig's status frames; switch it to lockstep and note its step count."""
+        """Wait for the rig's status frames; switch it to lockstep and note its step count; refuse a running table."""
         self.link = link
         self.table.attach(link)
         status = link.reader.sample("RIG_STATUS")
-        if not self._poll_for(lambda: status.count > 0, self.appear_timeout_s):
+        if not self._wait_for_rig(status):
             raise self._no_answer("no RIG_STATUS frame from a virtual rig", self.appear_timeout_s)
         if self.lockstep:
             self.base_step = self._enter_lockstep(link)
+        self._refuse_running_table(status)
+
+    def start_refused(self) -> bool:
+        """True when the newest RIG_STATUS says the rig refused this run's table start (its table was already running)."""
+        if self.link is None:
+            return False
+        status = self.link.reader.sample("RIG_STATUS")
+        return status.count > 0 and status.values[status.index("start_refused")] == 1.0
+
+    def _wait_for_rig(self, status: Sample) -> bool:
+        """Poll until the rig's first RIG_STATUS; an external rig silent for :data:`NO_RIG_NOTICE_S` is said so."""
+        first = min(NO_RIG_NOTICE_S, self.appear_timeout_s)
+        if self._poll_for(lambda: status.count > 0, first):
+            return True
+        rest = self.appear_timeout_s - first
+        if rest <= 0:
+            return False
+        if self.process is None:  # a rig this command started may still be compiling; an external one should answer
+            assert self.link is not None
+            self.notify(f"no rig answers on {self.link.bus.channel_info} (no RIG_STATUS in {first:g} s); "
+                        f"waiting {rest:g} s more for one (start it with `harness rig PROFILE --channel ...`)")
+        return self._poll_for(lambda: status.count > 0, rest)
+
+    def _refuse_running_table(self, status: Sample) -> None:
+        """Refuse, before arming, a table that already runs: an earlier run's, another harness's, or the rig's own record.
+
+        Its motion is not this run's record (the rig refuses a start while its table runs, RIG_STATUS
+        ``start_refused``): the run would be measured against a table it does not drive.
+        """
+        values = status.values
+        if values[status.index("table_running")] != 1.0:
+            return
+        raise BusError(
+            f"the rig's table is running (RIG_STATUS table_running, at {values[status.index('record_time')]:.2f} s into "
+            "the rig's record) while this harness is idle: the table is moving, started by an earlier run, another "
+            "harness or a rig serving other record options, and it would not play this run's record. Refused before "
+            "arming (this command sent no force); stop that table (restart `harness rig`) and run again"
+        )
 
     def _enter_lockstep(self, link: HarnessLink) -> int:
         """Switch the rig to lockstep and step it once with a disabled command; return its step index then.
@@ -245,6 +300,10 @@ class RigCoordinator:
         return wait
 
 
+def _note_on_stderr(line: str) -> None:
+    print(f"note: {line}", file=sys.stderr, flush=True)
+
+
 def simulated_twins(
     profile: Profile, motion: GroundMotion, rate_hz: float, controller: str, lockstep: bool, span_s: float | None = None,
 ) -> tuple[CaseResult, CaseResult]:
@@ -281,13 +340,22 @@ def record_span_s(session: SessionResult, motion: GroundMotion) -> float | None:
     return span if span < motion.duration_s else None
 
 
-def private_bus(can: CanConfig, external_rig: bool, suffix: str = "") -> CanConfig:
-    """``can`` on a channel private to this process (and ``suffix``) when the rig is ours on the private bus.
+#: Random bytes in the name of a dry run's private channel (hex-encoded: twice as many characters).
+CHANNEL_TOKEN_BYTES = 8
 
-    Two dry runs at once (or a test suite) then never meet on one ``seqpacket`` channel.
+
+def private_bus(can: CanConfig, external_rig: bool, suffix: str = "") -> CanConfig:
+    """``can`` on a channel private to this run (and ``suffix``) when the rig is ours on the private bus.
+
+    Two dry runs at once (or a test suite) then never meet on one ``seqpacket`` channel. The name
+    carries random bytes, so nobody can bind it before this run (a plain name is a socket in this
+    user's private directory, which no other user can write: drivers/seqpacket/channel.py); the rig
+    process is handed it, and each end admits only the other's process (:func:`_rig_process`,
+    ``SessionSettings.peer_pids``).
     """
     if can.interface == PRIVATE_BUS_INTERFACE and not external_rig:
-        return dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}{suffix}")
+        token = secrets.token_hex(CHANNEL_TOKEN_BYTES)
+        return dataclasses.replace(can, channel=f"{can.channel}-{os.getpid()}-{token}{suffix}")
     return can
 
 
@@ -359,19 +427,21 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     )
     check_log_dir(settings.log_dir)  # before the rig starts and the bus opens (run_session checks it again)
     with serving_virtual_rig(profile, can, options.lockstep, motion, options.external_rig) as coordinator:
+        settings.peer_pids = coordinator.peer_pids
         session = run_session(
             profile, settings, on_start=coordinator.table.start,
             make_lockstep=coordinator.lockstep_wait if options.lockstep else None,
             on_link=coordinator.on_link, on_host_timing=on_host_timing, console=console,
             stop_table=coordinator.table.stop,
         )
+        table_refused = TABLE_START_REFUSED if coordinator.start_refused() else ""
     peaks = run_peaks(load_run(session.run_path))  # weight: the metadata's, the resolved profile's
     passive = twin = None
     span = record_span_s(session, motion)
     if options.compare:
         passive, twin = simulated_twins(profile, motion, rate_hz, profile.control.controller, options.lockstep, span)
     write_dry_run_context(session.run_path, motion, passive, twin, span, options.lockstep)  # for `harness report`
-    return DryRunResult(session, profile, peaks, passive, twin, motion, span, truth_summary(differences))
+    return DryRunResult(session, profile, peaks, passive, twin, motion, span, truth_summary(differences), table_refused)
 
 
 def _stop_process(process: subprocess.Popen) -> None:

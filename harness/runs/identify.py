@@ -22,7 +22,6 @@ loop's own delay (a loop period between a command and the status frame that show
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -32,7 +31,7 @@ from typing import Literal
 import numpy as np
 
 from harness import exit_codes
-from harness.identification.actuator import ActuatorIdentification, identify_actuator_fit
+from harness.identification.actuator import FIT_PLOT_FILE, ActuatorIdentification, identify_actuator_fit
 from harness.identification.actuator_fit import VELOCITY_FILE
 from harness.identification.excitation import (
     Excitation,
@@ -41,6 +40,7 @@ from harness.identification.excitation import (
     excitation_signal,
 )
 from harness.identification.frf import FrequencyResponse, h1_estimate, read_frf_csv, write_frf_csv
+from harness.identification.outputs import OVERLAY_FILE, RECORD_FILE, claim_result_folder
 from harness.identification.plot import bode_plot
 from harness.loop.table_link import CanTableLink
 from harness.model.warmup import warm_up
@@ -62,6 +62,9 @@ CONDITION_LABELS: dict[Condition, str] = {
 }
 PLOT_FILE = "frf.png"
 EXCITATION_FILE = "excitation.json"
+#: Every result file DIR gets (:func:`~harness.identification.outputs.claim_result_folder`); the run folders
+#: are new folders each time.
+RESULT_FILES = (*FRF_FILES.values(), VELOCITY_FILE, PLOT_FILE, EXCITATION_FILE, OVERLAY_FILE, RECORD_FILE, FIT_PLOT_FILE)
 
 
 @dataclass(frozen=True)
@@ -83,6 +86,8 @@ class IdentifyOptions:
     lockstep : bool
         The virtual rig advances one step per command (ignored with ``external_rig``).
     show_console : bool
+    force : bool
+        Replace the results of an earlier identification in DIR (else refused before anything moves).
     """
 
     excitation: Excitation
@@ -93,6 +98,7 @@ class IdentifyOptions:
     external_rig: bool = False
     lockstep: bool = True
     show_console: bool = True
+    force: bool = False
 
     @property
     def in_lockstep(self) -> bool:
@@ -195,18 +201,8 @@ def _metadata(excitation: Excitation, condition: Condition, external_rig: bool) 
 
 
 def _write_excitation_record(out_dir: Path, profile: Profile, options: IdentifyOptions, runs: dict) -> Path:
-    """``excitation.json``: the options, the profile, the software, and per condition its run folder and outcome.
-
-    Conditions run earlier into the same DIR (``--blocked`` after a free run) keep their entries.
-    """
+    """``excitation.json``: the options, the profile, the software, and per condition of this run its run folder and outcome."""
     path = out_dir / EXCITATION_FILE
-    conditions: dict = {}
-    if path.is_file():
-        try:
-            conditions = dict(json.loads(path.read_text(encoding="utf-8")).get("conditions", {}))
-        except (ValueError, AttributeError):
-            conditions = {}
-    conditions.update(runs)
     env = environment()
     write_json_atomic(path, {
         "command": "identify actuator",
@@ -218,7 +214,7 @@ def _write_excitation_record(out_dir: Path, profile: Profile, options: IdentifyO
         "lockstep": options.in_lockstep,
         "input": FORCE_COMMAND, "output": FORCE_MEASURED, "estimator": "H1 = Pxy / Pxx, Welch, Hann, 50 % overlap",
         "harness_version": env["packages"].get("shaketable-harness"), "git_commit": env["git_commit"],
-        "conditions": conditions,
+        "conditions": dict(runs),
     })
     return path
 
@@ -248,6 +244,7 @@ def run_condition(
     )
     if virtual:
         with serving_virtual_rig(profile, can, options.in_lockstep, prepare_motion(profile)) as coordinator:
+            settings.peer_pids = coordinator.peer_pids  # the private channel admits only the rig process
             return run_session(
                 profile, settings, controller=controller, on_start=controller.start, on_link=coordinator.on_link,
                 make_lockstep=coordinator.lockstep_wait if options.in_lockstep else None,
@@ -260,6 +257,19 @@ def run_condition(
         on_link=table.attach if table is not None else None, stop_table=table.stop if table is not None else None,
         on_host_timing=on_host_timing, console=console,
     )
+
+
+def excitation_safety(profile: Profile) -> Profile:
+    """``profile`` for a run whose command is an identification excitation: ``force_oscillation`` indicates.
+
+    The excitation commands force up to the top of its band (30 Hz by default, 2 kN) on purpose: it
+    is the run's controller, so the check of force above the controller's band has no band to stand
+    on, and would stop the sweep as it nears its top (docs/SAFETY.md, "Sustained oscillation"). Its
+    amplitude and rate are bounded before anything moves (``check_within_limits``), and every other
+    check stays as the profile says. The check still records what it sees (``indicate``).
+    """
+    force = dataclasses.replace(profile.safety.force, oscillation_action="indicate")
+    return dataclasses.replace(profile, safety=dataclasses.replace(profile.safety, force=force))
 
 
 def identify_actuator(
@@ -286,7 +296,10 @@ def identify_actuator(
     Raises
     ------
     ExcitationError
-        An excitation beyond ``safety.force`` or too short for its resolution, before anything moves.
+        An excitation beyond ``safety.force``, too short for its resolution or with too few of its
+        frequencies in the band, before anything moves.
+    RunFolderError
+        A DIR holding an earlier identification's results without ``options.force``, before anything moves.
     """
     warm_up()  # compile the kernels now, never inside the loop or the rig
     excitation = options.excitation
@@ -294,7 +307,9 @@ def identify_actuator(
     samples = excitation_signal(excitation, rate_hz)
     measured_rate_hz = None if options.in_lockstep else profile.can.status_rate_hz
     check_within_limits(excitation, samples, rate_hz, profile.safety.force, measured_rate_hz)
+    profile = excitation_safety(profile)
     out_dir = Path(options.out_dir)
+    claim_result_folder(out_dir, RESULT_FILES, options.force)  # the fit then reads this run's responses only
     out_dir.mkdir(parents=True, exist_ok=True)
     runs: dict = {}
     excitation_path = _write_excitation_record(out_dir, profile, options, runs)

@@ -3,7 +3,10 @@
 ``python -m harness.runs.rig_process`` reads one JSON document on its standard input: the
 profile the dry run resolved (:meth:`harness.profile.Profile.resolved_data`), the CAN
 interface and channel, ``lockstep`` and ``parent_pid``. It parses no command-line
-options, so the rig always serves the very profile the loop runs. It serves until
+options, so the rig always serves the very profile the loop runs. On a ``seqpacket`` channel
+it admits only ``parent_pid`` at the other end (:mod:`drivers.seqpacket.peers`): the dry run
+made the channel's name and hands it over here, and a hub or relay that another process put on
+it is refused. It serves until
 SIGINT, or until the dry run's process is gone; a problem goes to standard error, which
 the dry run reports.
 """
@@ -27,7 +30,8 @@ def main() -> int:
     can_config = profile.can_settings(job["interface"], job["channel"])
     try:
         with stop_on_signals():
-            return serve_rig(profile, can_config, lockstep=job["lockstep"], parent_pid=job["parent_pid"])
+            return serve_rig(profile, can_config, lockstep=job["lockstep"], parent_pid=job["parent_pid"],
+                             peer_pids=(job["parent_pid"],))
     except EXPECTED_ERRORS as err:
         print(f"error: {err}", file=sys.stderr)
         return exit_codes.INPUT_ERROR

@@ -112,17 +112,20 @@ def serve_rig(
     on_ready: Callable[[VirtualRig], None] | None = None,
     parent_pid: int | None = None,
     on_journal: Callable[[float, str], None] | None = None,
+    peer_pids: tuple[int, ...] = (),
 ) -> int:
     """Serve the virtual rig of a resolved ``profile`` on ``can_config`` until stopped.
 
     The rig steps at the profile's ``control.rate_hz`` (the harness's tick rate) and plays
-    its ``record`` section. Parameters and return value as :func:`run_rig_command`.
+    its ``record`` section. Parameters and return value as :func:`run_rig_command`;
+    ``peer_pids``: on a ``seqpacket`` channel, the only processes the rig admits at the other
+    end (the dry run that started it), so a relay or a stranger on the channel is refused.
     """
     warm_up()  # compile the plant's kernel before serving the bus in real time
     motion = prepare_motion(profile)
     period = 1.0 / profile.control.rate_hz
     stop = stop_event or threading.Event()
-    with open_rig(can_config) as link:
+    with open_rig(can_config, peer_pids) as link:
         rig = VirtualRig(
             profile, motion, link, step_period_s=period, lockstep=lockstep or None, seed=seed, clock=clock,
             can_config=can_config,

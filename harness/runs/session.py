@@ -76,6 +76,9 @@ class SessionSettings:
     table_check_off: str = NO_RECORD
     #: ``--reset-drive``: reset the drive's latched fault before arming (:mod:`harness.runs.drive_reset`).
     reset_drive: bool = False
+    #: On a ``seqpacket`` channel, the only processes admitted at the other end (the rig process a dry run
+    #: started); empty: any process of this user (or of ``can.peer_group``).
+    peer_pids: tuple[int, ...] = ()
 
 
 @dataclass
@@ -121,7 +124,14 @@ def bus_statistics(link) -> dict:
         "foreign_commands": reader.counters.foreign_commands,
         "error_frames": health.error_frames,
         "send_failures": health.send_failures,
+        **refused_peers(link.bus),
     }
+
+
+def refused_peers(bus) -> dict:
+    """``{"refused_peers": [why, ...], "refused_peer_count": n}`` of a bus that checks its peers (seqpacket), else {}."""
+    count = getattr(bus, "refused_count", 0)
+    return {"refused_peers": list(bus.refused_peers), "refused_peer_count": count} if count else {}
 
 
 def _metadata(profile: Profile, settings: SessionSettings) -> dict:
@@ -265,7 +275,7 @@ def run_session(
         on_start, stop_table = table_link.start, table_link.stop
     check_log_dir(settings.log_dir)  # before the bus opens: an unwritable log directory is bad input, nothing started
     scheduling: Scheduling | None = None
-    link = open_harness(settings.can)
+    link = open_harness(settings.can, settings.peer_pids)
     folder = None
     try:
         folder = RunFolder.create(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from drivers.protocol_values import fault_name
 from harness.model.servo_controller import steady_bleed_N
 from harness.safety.comms_detectors import FlagDetector
 from harness.safety.config import ActuatorConfig, ForceConfig
@@ -11,7 +12,11 @@ from harness.safety.health import TickHealth
 
 
 class DriveFault(FlagDetector):
-    """The actuator's servo controller reports a fault (``health.drive_fault``)."""
+    """The actuator's servo controller reports a fault (``health.drive_fault``), named by its fault code.
+
+    A watchdog fault the loop's own stall caused is not this check's: ``loop_stall`` is judged
+    first, on the tick that ends the stall (docs/SAFETY.md, "Stall attribution").
+    """
 
     NAME = "drive_fault"
     ACTION = Action.TRIP
@@ -24,6 +29,14 @@ class DriveFault(FlagDetector):
     def bad(self, health: TickHealth) -> bool:
         """True while the drive reports a fault."""
         return health.drive_fault
+
+    def detail(self, health: TickHealth) -> str:
+        """The phrase and the drive's fault code by name."""
+        return f"{self.WHAT}: fault code {health.drive_fault_code} ({fault_name(health.drive_fault_code)})"
+
+    def present(self, health: TickHealth) -> str:
+        """Still reported?"""
+        return self.detail(health) if self.bad(health) else ""
 
 
 class HydraulicPressure(FlagDetector):

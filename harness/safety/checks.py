@@ -47,6 +47,7 @@ from harness.safety.detector_base import Detector
 from harness.safety.events import Action
 from harness.safety.interlocks import ForceClamp, ForceRateLimit, StrokeHardLimit, StrokePredictiveLimit, StrokeSoftFade
 from harness.safety.operator_detectors import EStop, EStopLost, LoopStall, OperatorStop, OperatorTrip
+from harness.safety.oscillation_detectors import ForceOscillation
 from harness.safety.sensor_detectors import (
     SensorDisagree,
     SensorInvalid,
@@ -100,6 +101,11 @@ CHECKS: tuple[Check, ...] = (
     Check(30, EStopLost, lambda config, table: EStopLost(config.estop)),
     Check(27, OperatorTrip, lambda config, table: OperatorTrip()),
     Check(26, OperatorStop, lambda config, table: OperatorStop()),
+    # the loop's stalls: a stall is the first cause of what it lets happen while the loop is away (the drive's
+    # watchdog fault, a sensor that moved further than a jump between two samples, seen in the same tick), so it
+    # is judged before the checks that would see those; the operator's requests are no consequence of it
+    # (docs/SAFETY.md, "Stall attribution")
+    Check(21, LoopStall, lambda config, table: LoopStall(config.run)),
     # the sensors; a sign flip usually trips sensor_disagree too, later: on a tick where both hold,
     # the more specific sensor_sign_flip is the reason
     Check(5, SensorInvalid, lambda config, table: SensorInvalid(config.sensors)),
@@ -122,8 +128,7 @@ CHECKS: tuple[Check, ...] = (
     Check(19, ActuatorStatusStale, lambda config, table: ActuatorStatusStale(config.actuator)),
     Check(20, ForceTracking, lambda config, table: ForceTracking(config.force)),
     Check(33, CompensationFault, lambda config, table: CompensationFault(config.force)),
-    # the loop's stalls
-    Check(21, LoopStall, lambda config, table: LoopStall(config.run)),
+    Check(34, ForceOscillation, lambda config, table: ForceOscillation(config.force)),
     # the table against its record: the mismatch adds the tick's sample and judges when due
     Check(31, TableRecordMismatch, lambda config, table: TableRecordMismatch(table)),
     Check(32, TableRecordMarginal, lambda config, table: TableRecordMarginal(table)),

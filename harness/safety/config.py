@@ -60,6 +60,22 @@ class ForceConfig:
     actuator_rating_N: float | None = quantity(
         None, unit="N", gt=0, doc="rated force of the real rig's actuator; max_force_N may not exceed it (null: not declared)",
     )
+    # A sustained oscillation of the force above the controller's band: a limit cycle of the force loop
+    # (docs/SAFETY.md, "Sustained oscillation" derives the corner, the window and the limit).
+    oscillation_corner_hz: float = quantity(
+        30.0, unit="Hz", gt=0, le=1000.0,
+        doc="corner of the 2nd-order high-pass on the commanded and measured force: above the controller's band",
+    )
+    oscillation_window_s: float = quantity(
+        0.5, unit="s", gt=0, le=10.0, doc="time constant of the running mean square of the high-passed force",
+    )
+    oscillation_limit_N: float = quantity(
+        475.0, unit="N", gt=0, le=1.0e6,
+        doc="RMS of the high-passed commanded or measured force above which the force oscillates (fatigue cut-off)",
+    )
+    oscillation_action: DetectorActionName = field(
+        default="safe_stop", metadata={"doc": "action on a sustained force oscillation"},
+    )
 
 
 @dataclass(frozen=True)
@@ -137,7 +153,7 @@ TRIP_CLASS_OF: dict[str, str] = {
     "e2e_rejects": "comms", "bus_error_frames": "comms", "bus_error_passive": "comms", "bus_off": "comms",
     "bus_send_failures": "comms", "bus_gone": "comms", "foreign_command": "comms",
     "drive_fault": "actuator", "hydraulic_pressure": "actuator", "actuator_status_stale": "actuator",
-    "force_tracking": "actuator", "compensation_fault": "actuator",
+    "force_tracking": "actuator", "compensation_fault": "actuator", "force_oscillation": "actuator",
     "loop_stall": "loop", "loop_timing": "loop",
     "estop": "operator", "estop_lost": "operator", "operator_stop": "operator", "operator_trip": "operator",
     "tick_exception": "internal", "controller_output": "internal",
@@ -166,7 +182,8 @@ class TripActionsConfig:
     sensor: tuple[TripActionName, ...] = _actions("on the sensor_* checks")
     comms: tuple[TripActionName, ...] = _actions("on the e2e_rejects, bus_* and foreign_command checks")
     actuator: tuple[TripActionName, ...] = _actions(
-        "on drive_fault, hydraulic_pressure, actuator_status_stale, force_tracking, compensation_fault"
+        "on drive_fault, hydraulic_pressure, actuator_status_stale, force_tracking, compensation_fault "
+        "(force_oscillation when its action trips)"
     )
     loop: tuple[TripActionName, ...] = _actions("on loop_stall, loop_timing")
     operator: tuple[TripActionName, ...] = _actions("on estop, estop_lost, operator_trip (operator_stop when its action trips)")
@@ -279,8 +296,19 @@ def _stall_problems(config: SafetyConfig) -> list[str]:
     return []
 
 
+#: Fewest cycles at the oscillation corner the window must hold (docs/SAFETY.md, "Sustained oscillation").
+MIN_OSCILLATION_CYCLES = 3.0
+
+
 def _force_problems(force: ForceConfig, run: RunConfig) -> list[str]:
     problems = []
+    cycles = force.oscillation_window_s * force.oscillation_corner_hz
+    if cycles < MIN_OSCILLATION_CYCLES:
+        problems.append(
+            f"force.oscillation_window_s ({force.oscillation_window_s:g} s) holds {cycles:g} cycles at "
+            f"force.oscillation_corner_hz ({force.oscillation_corner_hz:g} Hz), expected at least "
+            f"{MIN_OSCILLATION_CYCLES:g}: a shorter window takes a transient for an oscillation"
+        )
     if force.tracking_tolerance_N >= 2 * force.max_force_N:
         problems.append(
             f"force.tracking_tolerance_N ({force.tracking_tolerance_N:g} N) is at least twice force.max_force_N "

@@ -9,6 +9,8 @@ records an event.
 
 from __future__ import annotations
 
+import math
+
 from harness.safety.events import Action
 from harness.safety.health import TickHealth
 
@@ -173,3 +175,40 @@ class LowPass:
         """Set the output to ``value``; unprimed filters take their next input as is."""
         self.y = value
         self.primed = primed
+
+
+class HighPass:
+    """Second-order Butterworth high-pass at ``corner_hz``, by the bilinear transform at each step's ``dt``.
+
+    ``H(s) = s^2 / (s^2 + sqrt(2) w_c s + w_c^2)``, pre-warped so the corner is exact at every step:
+    with ``K = tan(pi f_c dt)``, ``y = b0 (u - 2 u1 + u2) - a1 y1 - a2 y2``, ``b0 = 1 / (1 + sqrt(2) K + K^2)``,
+    ``a1 = 2 (K^2 - 1) b0``, ``a2 = (1 - sqrt(2) K + K^2) b0``. A step longer than :attr:`max_step_s`
+    (a quarter period at the corner: a stall) is taken as that long, so ``K`` stays at most 1 and the
+    filter stable. Primed by its first input at rest (a constant input gives 0).
+    """
+
+    __slots__ = ("corner_hz", "max_step_s", "_u1", "_u2", "_y1", "_y2", "primed")
+
+    def __init__(self, corner_hz: float) -> None:
+        self.corner_hz = corner_hz
+        self.max_step_s = 0.25 / corner_hz
+        self._u1 = self._u2 = self._y1 = self._y2 = 0.0
+        self.primed = False
+
+    def update(self, u: float, dt: float) -> float:
+        """Filter one sample taken ``dt`` seconds after the previous one."""
+        if not self.primed:
+            self.primed = True
+            self._u1 = self._u2 = u
+            self._y1 = self._y2 = 0.0
+        k = math.tan(math.pi * self.corner_hz * min(dt, self.max_step_s))
+        b0 = 1.0 / (1.0 + math.sqrt(2.0) * k + k * k)
+        y = (b0 * (u - 2.0 * self._u1 + self._u2) - 2.0 * (k * k - 1.0) * b0 * self._y1
+             - (1.0 - math.sqrt(2.0) * k + k * k) * b0 * self._y2)
+        self._u2, self._u1 = self._u1, u
+        self._y2, self._y1 = self._y1, y
+        return y
+
+    def reset(self) -> None:
+        """Unprime: the next input starts the filter at rest."""
+        self.primed = False

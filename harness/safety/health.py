@@ -40,6 +40,9 @@ class TickHealth:
         A frame with the actuator command ID was seen that this harness did not send.
     drive_ready, drive_fault, pressure_ok : bool
         From the newest actuator status frame.
+    drive_fault_code : int
+        The fault code of the newest actuator status frame (:class:`drivers.protocol_values.FaultCode`;
+        0 none): why the drive faulted, e.g. its heartbeat watchdog.
     actuator_status_age_s : float
         Age of the newest actuator status frame (s).
     measured_force_N : float
@@ -85,6 +88,7 @@ class TickHealth:
     foreign_command: bool = False
     drive_ready: bool = True
     drive_fault: bool = False
+    drive_fault_code: int = 0
     pressure_ok: bool = True
     actuator_status_age_s: float = 0.0
     measured_force_N: float = 0.0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from drivers.protocol_values import fault_name
 from harness.safety.comms_detectors import FlagDetector
 from harness.safety.config import EStopConfig, RunConfig
 from harness.safety.detector_base import Detector
@@ -22,9 +23,12 @@ class LoopStall(Detector):
     ``stall_s`` is the time since the previous tick's command, measured by the loop on waking:
     missed time, not a count of late ticks (one 45 ms stall at 500 Hz is 22 missed periods). A
     stalled loop cannot act, so it trips on the first tick after the stall; during the stall
-    the drive-side watchdog is the backstop. Shorter stalls are ridden through by the loop:
-    counted, recorded as an event and shown on the console. A reset is never refused (the
-    stall is over once the loop runs again).
+    the drive-side watchdog is the backstop. It is judged after the operator's requests and
+    before the sensor, CAN and actuator checks: a watchdog fault the drive latched during the
+    stall, seen in the same tick, is the stall's consequence, and the detail names it; a
+    sensor that moved further than a jump between the two samples around the stall is too.
+    Shorter stalls are ridden through by the loop: counted, recorded as an event and shown on
+    the console. A reset is never refused (the stall is over once the loop runs again).
     """
 
     NAME = "loop_stall"
@@ -44,11 +48,13 @@ class LoopStall(Detector):
         return health.stall_s > self.limit_s
 
     def detail(self, health: TickHealth) -> str:
-        """How long, against the budget, and what to do: this is host timing, not the rig."""
+        """How long, against the budget, what the drive did meanwhile, and what to do: this is host timing, not the rig."""
+        drive = (f"; the drive reports fault code {health.drive_fault_code} ({fault_name(health.drive_fault_code)}) "
+                 "after it, a consequence of the stall" if health.drive_fault else "")
         return (
             f"the loop went {health.stall_s * 1e3:.1f} ms without a command ({health.missed_periods} missed periods), "
-            f"expected at most {self.limit_s * 1e3:.1f} ms (the stall budget): the host did not run the loop in time; "
-            + HOST_TIMING_REMEDIES
+            f"expected at most {self.limit_s * 1e3:.1f} ms (the stall budget){drive}: the host did not run the loop in "
+            "time; " + HOST_TIMING_REMEDIES
         )
 
     def present(self, health: TickHealth) -> str:

@@ -7,9 +7,9 @@ force. It returns the same preallocated :class:`SupervisedCommand` every tick.
 
 The checks run in the fixed order of :data:`harness.safety.checks.CHECKS` (in ARMED, RUNNING
 and STOPPING; the first TRIP wins and is latched as the reason, later checks are not evaluated
-on that tick): the loop's time, then every detector (operator, sensors, CAN, actuator, stalls,
-the table against its record), then the controller's output and the stroke trips, then the
-force shaping (clamp, stopping ramp, rate limit, stroke fade). STOPPING becomes DONE on the
+on that tick): the loop's time, then every detector (operator, stalls, sensors, CAN, actuator and
+the force's oscillation, the table against its record), then the controller's output and the
+stroke trips, then the force shaping (clamp, stopping ramp, rate limit, stroke fade). STOPPING becomes DONE on the
 first tick at or after the ramp time whose shaped force is exactly zero (at once if the stop
 came from ARMED, where no force was applied).
 
@@ -42,6 +42,7 @@ from harness.safety.interlocks import (
 )
 from harness.safety.lifecycle import DRIVE_STATES, Lifecycle, State
 from harness.safety.operator_detectors import EStop, OperatorStop, OperatorTrip
+from harness.safety.oscillation_detectors import ForceOscillation
 from harness.safety.prearm import pre_arm_failures
 from harness.safety.supervisor_checks import ControllerOutput, LoopTiming, StopRamp, TickException
 from harness.safety.table_record import TableRecordCheck
@@ -116,7 +117,7 @@ class Supervisor:
 
     __slots__ = (
         "config", "lifecycle", "command", "events", "act_ticks", "soft", "hard", "predictive", "clamp", "rate",
-        "tracking", "_estop", "_operator_trip", "detectors", "_bits", "_slots", "_previous_N", "_ramp_gain",
+        "tracking", "oscillation", "_estop", "_operator_trip", "detectors", "_bits", "_slots", "_previous_N", "_ramp_gain",
         "_last_acted", "period_s", "table_record", "stop_reason", "stop_detail", "_ramp_detail",
     )
 
@@ -143,6 +144,7 @@ class Supervisor:
         #: The detectors, in the order of :data:`harness.safety.checks.CHECKS`.
         self.detectors: tuple[Detector, ...] = build_detectors(config, self.table_record)
         self.tracking = self._detector(ForceTracking)
+        self.oscillation = self._detector(ForceOscillation)
         self._estop, self._operator_trip = self._detector(EStop), self._detector(OperatorTrip)
         self._bits = tuple(bit(d.NAME) for d in self.detectors)
         self._slots = tuple(index(d.NAME) for d in self.detectors)
@@ -276,6 +278,7 @@ class Supervisor:
         command.trip_reason = self.lifecycle.trip_reason
         self._previous_N = 0.0
         self.tracking.command_N = 0.0
+        self.oscillation.command_N = 0.0
         return command
 
     def _count(self, slot: int, flag: int) -> bool:
@@ -375,6 +378,7 @@ class Supervisor:
             return self._finish_tick(self._off(t))
         self._previous_N = force
         self.tracking.command_N = force
+        self.oscillation.command_N = force
         command.t = t
         command.force_N = force
         command.enable = True

@@ -56,6 +56,10 @@ DIRECTIONS: dict[str, Direction] = {
     "force.supply_force_N": "smaller",  # a smaller A p_s claims a larger deficit when the force pushes along the stroke
     "force.tracking_action": "milder",
     "force.actuator_rating_N": "larger",  # None (no rating declared) is the weakest
+    "force.oscillation_corner_hz": "larger",  # a higher corner hides a limit cycle between the two
+    "force.oscillation_window_s": "larger",  # a longer window acts later
+    "force.oscillation_limit_N": "larger",
+    "force.oscillation_action": "milder",
     "sensors.max_sensor_age_s": "larger",
     "sensors.displacement_range_m": "larger",
     "sensors.velocity_range_m_s": "larger",

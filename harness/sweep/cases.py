@@ -184,9 +184,11 @@ def _records(study: Study, profile: Profile) -> list[StudyRecord]:
     from harness.motions.catalog import records_dir_from
 
     records_dir = records_dir_from(study.records_dir(), profile.record.records_dir, base_dir=profile.base_dir)
+    unit = profile.record.accel_unit
     if study.axes.records is None:
-        return checked_records((profile.record.name,), profile.base_dir, records_dir, study.source_path, "axes.records")
-    return checked_records(study.axes.records, study.base_dir, records_dir, study.source_path, "axes.records")
+        return checked_records((profile.record.name,), profile.base_dir, records_dir, study.source_path, "axes.records",
+                               unit)
+    return checked_records(study.axes.records, study.base_dir, records_dir, study.source_path, "axes.records", unit)
 
 
 def base_of(study: Study) -> BaseProfile:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from harness.errors import ProfileError, RecordError
 from harness.motions.catalog import RECORD_SUFFIXES, looks_like_path, resolve_record, synthetic_seed
+from harness.motions.loaders import load_record
 from harness.motions.white_noise import white_noise_spec
 
 
@@ -46,18 +47,35 @@ def file_digest(path: Path) -> str:
     return digest.hexdigest()
 
 
-def _from_file(label: str, path: Path) -> StudyRecord:
+def _from_file(label: str, path: Path, accel_unit: str | None = None) -> StudyRecord:
+    """The study record of the file at ``path``, once the record loader has read it as a record.
+
+    A study names its records by path, and each case's results carry what the loader said about its
+    record; so a file that is not a record (any readable file) is refused here, before any case, with
+    the loader's reason, which quotes at most a short escaped excerpt of it
+    (:func:`harness.motions.loaders.excerpt`).
+    """
     path = path.resolve()
+    if path.suffix.lower() not in RECORD_SUFFIXES:
+        raise RecordError(
+            f"{path} is not a record file: a study reads ground-motion records ending in {', '.join(RECORD_SUFFIXES)}"
+        )
+    try:
+        load_record(path, accel_unit=accel_unit)
+    except RecordError as err:
+        raise RecordError(f"{path} is not a ground-motion record the loader reads: {err}") from err
     return StudyRecord(label, str(path), file_digest(path))
 
 
-def _folder_records(folder: Path) -> list[StudyRecord]:
+def _folder_records(folder: Path, accel_unit: str | None) -> list[StudyRecord]:
     """Every record file of a folder (suffixes of ``harness records``), sorted by name."""
     files = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in RECORD_SUFFIXES)
-    return [_from_file(p.stem, p) for p in files]
+    return [_from_file(p.stem, p, accel_unit) for p in files]
 
 
-def study_records(entries: tuple[str, ...], base_dir: Path, records_dir: Path | None) -> list[StudyRecord]:
+def study_records(
+    entries: tuple[str, ...], base_dir: Path, records_dir: Path | None, accel_unit: str | None = None,
+) -> list[StudyRecord]:
     """The records that ``entries`` name.
 
     Parameters
@@ -68,11 +86,14 @@ def study_records(entries: tuple[str, ...], base_dir: Path, records_dir: Path | 
         Relative paths are relative to this (the study file's directory, or the profile's).
     records_dir : Path, optional
         Where names are looked up (as ``--records-dir``).
+    accel_unit : str, optional
+        The profile's ``record.accel_unit``, for files that do not state their unit.
 
     Raises
     ------
     RecordError
-        For an entry that names no record, with what was looked for (the caller adds the key).
+        For an entry that names no record, or a file that is not one, with what was looked for
+        or why (the caller adds the key).
     """
     found: list[StudyRecord] = []
     for entry in entries:
@@ -86,14 +107,14 @@ def study_records(entries: tuple[str, ...], base_dir: Path, records_dir: Path | 
         path = Path(entry).expanduser()
         path = path if path.is_absolute() else base_dir / path
         if path.is_dir():
-            in_folder = _folder_records(path)
+            in_folder = _folder_records(path, accel_unit)
             if not in_folder:
                 raise RecordError(f"folder {path} holds no record file ({', '.join(RECORD_SUFFIXES)})")
             found.extend(in_folder)
         elif path.is_file() or looks_like_path(entry):
-            found.append(_from_file(path.stem, resolve_record(str(path), records_dir)))
+            found.append(_from_file(path.stem, resolve_record(str(path), records_dir), accel_unit))
         else:
-            found.append(_from_file(entry, resolve_record(entry, records_dir)))
+            found.append(_from_file(entry, resolve_record(entry, records_dir), accel_unit))
     return found
 
 
@@ -116,13 +137,14 @@ def count_records(entries: tuple[str, ...], base_dir: Path) -> int:
 
 
 def checked_records(
-    entries: tuple[str, ...], base_dir: Path, records_dir: Path | None, source: str, key: str
+    entries: tuple[str, ...], base_dir: Path, records_dir: Path | None, source: str, key: str,
+    accel_unit: str | None = None,
 ) -> list[StudyRecord]:
     """:func:`study_records`, each problem refused as a :class:`ProfileError` of the study file at ``key``."""
     records = []
     for i, entry in enumerate(entries):
         try:
-            records.extend(study_records((entry,), base_dir, records_dir))
+            records.extend(study_records((entry,), base_dir, records_dir, accel_unit))
         except RecordError as err:
             raise ProfileError(f"found {entry!r}: {err}", source, f"{key}[{i}]") from err
     labels = [record.label for record in records]

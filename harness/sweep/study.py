@@ -180,8 +180,10 @@ class Study:
     source_path: str = internal("", "the study file")
 
     def __post_init__(self) -> None:
-        if not self.name.strip() or any(ch in self.name for ch in "/\\"):
-            raise ValueError(f"name: found {self.name!r}, expected a short name without slashes")
+        # "." and ".." name the results folder's parent or itself: logs/sweeps/.. is logs/
+        dots_only = set(self.name) <= {"."}
+        if not self.name.strip() or any(ch in self.name for ch in "/\\") or dots_only or not self.name.isprintable():
+            raise ValueError(f"name: found {self.name!r}, expected a short name without slashes, not made of dots only")
         axes = [key for key in self.axes.set] + [key for key in self.axes.scale]
         sampled = [] if self.monte_carlo is None else [key for _, key in self.monte_carlo.keys()]
         both = sorted(set(axes) & set(sampled))

@@ -21,6 +21,7 @@ import pytest
 
 from harness import exit_codes
 from harness.cli import main
+from harness.profile import load_profile
 from tests.conftest import PROFILES
 from tests.unit.test_profile import BAD_PROFILES
 
@@ -200,6 +201,10 @@ BAD_ARGUMENTS = {
         ["sweep", "{tmp}/huge_study.yaml", "--plan"],
         ["huge_study.yaml", "axes", "10000000 cases", "10 records x 1000 PGA levels", "expected at most 100000 (MAX_CASES)"],
     ),
+    "reset_drive_without_external_rig_quiet": (["dry-run", "--reset-drive", "--quiet"],
+                                               ["--reset-drive resets the drive", "add --external-rig"]),
+    "study_record_is_not_a_record": (["sweep", "{tmp}/secret_study.yaml"],
+                                     ["secret_study.yaml", "axes.records[0]", "is not a record file"]),
     "sweep_of_ten_million_cases": (["sweep", "{tmp}/huge_study.yaml"], ["huge_study.yaml", "axes", "(MAX_CASES)"]),
     # --- second review: unclear messages, and a run folder written ---
     "lockstep_rate_0_001": (
@@ -230,10 +235,50 @@ BAD_ARGUMENTS = {
     "duration_below_ten_record_samples": (
         ["simulate", "--duration", "0.03"], ["--duration", "0.03 s", "expected at least 0.05 s", "10 samples of the record"],
     ),
+    # --- third review (issue 30): data and messages ---
+    "identify_actuator_band_between_two_bins": (  # excited the actuator, then an IndexError
+        ["identify", "actuator", "--resolution-hz", "10", "--band-hz", "1,5", "--duration", "2", "--out", "{tmp}/frf"],
+        ["--resolution-hz", "a frequency every 7.81 Hz", "--band-hz 1,5 holds 0 of them", "expected at least 10"],
+    ),
+    "identify_actuator_into_earlier_results": (
+        ["identify", "actuator", "--duration", "4", "--resolution-hz", "1", "--out", "{tmp}/earlier_results"],
+        ["earlier_results", "already holds the results of an earlier identification", "excitation.json", "--force"],
+    ),
+    "identify_structure_band_between_two_bins": (  # an IndexError
+        ["identify", "structure", "{tmp}/quiet_run", "--band-hz", "1,1.01", "--out", "{tmp}/ident"],
+        ["--band-hz 1,1.01 holds 0 frequencies", "expected at least 10"],
+    ),
+    "identify_structure_nan_row": (  # a ValueError
+        ["identify", "structure", "{tmp}/nan_row_run", "--out", "{tmp}/ident"],
+        ["nan_row_run", "is nan on 1 row(s)", "line 7 of signals.csv", "expected a number on every row"],
+    ),
+    "identify_structure_same_run_twice": (  # passed the quality gate it failed alone
+        ["identify", "structure", "{tmp}/quiet_run", "{tmp}/quiet_run_copy", "--out", "{tmp}/ident"],
+        ["quiet_run and", "quiet_run_copy", "the same signals.csv", "expected each run once"],
+    ),
+    "identify_bearing_incomplete_run": (  # used without a word
+        ["identify", "bearing", "{tmp}/incomplete_run", "--out", "{tmp}/ident"],
+        ["incomplete_run", "its outcome is 'incomplete'", "expected a run that ended"],
+    ),
+    "identify_structure_into_earlier_results": (
+        ["identify", "structure", "{tmp}/quiet_run", "--out", "{tmp}/earlier_results"],
+        ["already holds the results of an earlier identification", "identified.yaml", "--force"],
+    ),
+    "json_over_a_runs_metadata": (  # then `harness report RUN` exited 2
+        ["simulate", "--json", "{tmp}/quiet_run/metadata.json"], ["--json", "is in the run folder", "never overwritten"],
+    ),
+    "json_over_an_existing_file": (["simulate", "--json", "{tmp}/file.txt"], ["--json", "file.txt exists", "--force"]),
+    "overlay_of_dev_zero": (["simulate", "--overlay", "/dev/zero"],
+                            ["/dev/zero", "is a character device, not a file", "expected an existing YAML file"]),
+    "study_named_dot_dot": (["sweep", "{tmp}/dots_study.yaml"], ["dots_study.yaml", "name: found '..'", "dots only"]),
+    "mu_max_above_one": (["simulate", "--set", "bearing.mu_max=2"], ["bearing.mu_max", "found 2", "<= 1"]),
+    "sweep_sample_of_mu_max_above_one": (  # read "<= 1 1": a ratio's unit "1" after its bound
+        ["sweep", "{tmp}/mu_study.yaml"], ["mu_study.yaml", "monte_carlo", "bearing.mu_max", "expected a value >= 0 and <= 1 ("],
+    ),
 }
 
 #: Paths of the table that exist on Linux only.
-KERNEL_PATHS = ("/proc/", "/sys/")
+KERNEL_PATHS = ("/proc/", "/sys/", "/dev/")
 
 
 def _run_folder(parent: Path, name: str, rows: int = 40) -> Path:
@@ -274,13 +319,56 @@ def inputs(tmp_path_factory) -> Path:
     study = f"profile: {profile}\noptions: {{duration_s: 1}}\n"
     (tmp / "deep_study.yaml").write_text(study + "name: " + "[" * 500 + "]" * 500 + "\n")
     (tmp / "bomb_study.yaml").write_text(study + ALIAS_BOMB + "name: *l8\n")
+    (tmp / "secret").write_text("root:$6$hash-that-must-not-be-echoed:19000:0:99999:7:::\n")
+    (tmp / "secret_study.yaml").write_text(study + f"name: secret\naxes:\n  records: [{tmp / 'secret'}]\n")
     records = ", ".join(f'"synthetic:{seed}"' for seed in range(1, 11))
     (tmp / "huge_study.yaml").write_text(
         study + f"name: huge\naxes:\n  records: [{records}]\n  pga_levels: {{start_g: 0.1, stop_g: 0.4, count: 1000}}\n"
         "monte_carlo:\n  samples: 1000\n  seed: 1\n  set: {bearing.mu_max: {kind: uniform, low: 0.05, high: 0.12}}\n"
     )
+    _identification_inputs(tmp)
     return tmp
 
+
+def _identification_inputs(tmp: Path) -> None:
+    """Run folders an identification refuses, and a folder of earlier results (issue 30)."""
+    import json
+    import shutil
+
+    import numpy as np
+
+    from harness.recording import write_simulation_case
+
+    profile_data = load_profile().resolved_data()
+    columns = ("t_s", "base_acceleration_m_s2", *(f"floor_acceleration_{j}_m_s2" for j in (1, 2, 3)))
+    rng = np.random.default_rng(1)
+    arrays = {"t_s": np.arange(5000) / 500.0, **{name: 0.01 * rng.standard_normal(5000) for name in columns[1:]}}
+    quiet = write_simulation_case(tmp, "quiet_run", columns, arrays, {"profile_name": "nceer_4dof"}, profile_data=profile_data)
+    shutil.copytree(quiet, tmp / "quiet_run_copy")
+    arrays["base_acceleration_m_s2"][5] = np.nan
+    write_simulation_case(tmp, "nan_row_run", columns, arrays, {"profile_name": "nceer_4dof"}, profile_data=profile_data)
+    incomplete = shutil.copytree(quiet, tmp / "incomplete_run")
+    metadata = json.loads((incomplete / "metadata.json").read_text())
+    (incomplete / "metadata.json").write_text(json.dumps({**metadata, "outcome": "incomplete"}))
+    (tmp / "earlier_results").mkdir()
+    for name in ("identified.yaml", "identification.json", "excitation.json"):
+        (tmp / "earlier_results" / name).write_text("{}\n")
+    (tmp / "dots_study.yaml").write_text(f"profile: {PROFILES / 'nceer_4dof.yaml'}\nname: '..'\noptions: {{duration_s: 1}}\n"
+                                         "axes: {records: [synthetic], pga_g: [0.1]}\n")
+    (tmp / "mu_study.yaml").write_text(f"profile: {PROFILES / 'nceer_4dof.yaml'}\nname: mu\noptions: {{duration_s: 1}}\n"
+                                       "axes: {records: [synthetic], pga_g: [0.1]}\nmonte_carlo: {samples: 2, seed: 1, set: "
+                                       "{bearing.mu_max: {kind: uniform, low: 1.2, high: 1.5}}}\n")
+
+
+def _unchanged_inputs(inputs: Path) -> None:
+    """What the rows of issue 30 must leave as it was: the run folder --json named, the earlier results."""
+    import json
+
+    assert json.loads((inputs / "quiet_run" / "metadata.json").read_text())["outcome"] == "completed"
+    assert sorted(p.name for p in (inputs / "earlier_results").iterdir()) == [
+        "excitation.json", "identification.json", "identified.yaml",
+    ]
+    assert not (inputs / "ident").exists() and not (inputs / "frf").exists()
 
 
 @pytest.mark.parametrize("case", sorted(BAD_ARGUMENTS))
@@ -308,7 +396,8 @@ def test_bad_argument_gives_exit_2_and_names_what_was_expected(inputs, capsys, c
     assert len(err) < 4000, "the message quotes too much of what it refused"
     assert not (inputs / "logs").exists() or not any((inputs / "logs").iterdir()), "a run folder was made"
     assert not (inputs / "sweep_results").exists(), "a sweep results folder was made"
-    assert (inputs / "file.txt").is_file()
+    assert (inputs / "file.txt").read_text() == "not a folder\n"
+    _unchanged_inputs(inputs)
 
 
 def test_the_old_misleading_messages_are_gone(inputs, capsys):
@@ -318,6 +407,11 @@ def test_the_old_misleading_messages_are_gone(inputs, capsys):
     assert "--accel-unit" not in capsys.readouterr().err  # no such flag exists
     main(["simulate", "--record", str(inputs / "huge.csv"), "--duration", "1"])
     assert "inf g" not in capsys.readouterr().err
+    main(["simulate", "--set", "bearing.mu_max=2", "--duration", "1"])
+    assert "<= 1 1" not in capsys.readouterr().err  # a ratio's unit "1" was printed after its bound
+    if Path("/dev/zero").exists():
+        main(["simulate", "--overlay", "/dev/zero", "--duration", "1"])
+        assert "not found" not in capsys.readouterr().err  # it exists: it is no regular file
 
 
 def test_every_numeric_option_is_range_checked():

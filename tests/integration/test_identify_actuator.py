@@ -149,7 +149,7 @@ def test_the_help_examples_parse():
     assert len(lines) >= 3
     for line in lines:
         args = build_parser().parse_args(shlex.split(line)[1:])
-        assert args.kind == "actuator" and args.out == "frf/"
+        assert args.kind == "actuator" and args.out.startswith("frf")  # each its own DIR: a used one is refused
 
 
 def test_rows_of_skipped_ticks_are_filled_in_on_the_tick_grid():

@@ -36,8 +36,10 @@ from harness.rig.config import (
 )
 from harness.rig.faults import fault_id_for
 from harness.rig.virtual_rig import RigParts, VirtualRig
+from harness.runs.dry_run import RigCoordinator
 from harness.runs.options import StudyOptions, prepare_motion
 from harness.runs.rig_service import run_rig_command
+from harness.safety.lifecycle import State
 from tests.conftest import PROFILES
 
 PERIOD = 0.002
@@ -151,6 +153,41 @@ def test_lockstep_publishes_in_contract_order_one_step_per_command(bench):
         assert b.rig.state.rig_time_s == pytest.approx(k * PERIOD)
     assert b.value("RIG_STATUS", "table_running") == 1
     assert b.value("RIG_STATUS", "record_time") == pytest.approx(4 * PERIOD, abs=1e-4), "the record started at step 1"
+
+
+def test_a_start_while_the_table_runs_is_answered_with_start_refused(bench):
+    b = bench()
+    b.start()
+    b.step(n=3)
+    assert b.value("RIG_STATUS", "table_running") == 1 and b.value("RIG_STATUS", "start_refused") == 0
+    record_time = b.value("RIG_STATUS", "record_time")
+    b.control(RigCommand.START_TABLE)
+    assert b.value("RIG_STATUS", "start_refused") == 1, "the rig answers a start it cannot obey, at once in lockstep"
+    assert b.value("RIG_STATUS", "record_time") == pytest.approx(record_time, abs=1e-4), "the record was not restarted"
+    assert any("start table refused" in line for _, line in b.rig.journal.drain())
+    coordinator = RigCoordinator(True, PERIOD)
+    coordinator.link = b.link
+    assert coordinator.start_refused(), "the dry run reads the rig's answer"
+    b.control(RigCommand.STOP_TABLE)
+    assert b.value("RIG_STATUS", "start_refused") == 0 and b.value("RIG_STATUS", "table_running") == 0
+    assert not coordinator.start_refused()
+    b.control(RigCommand.START_TABLE)
+    b.step()
+    assert b.value("RIG_STATUS", "start_refused") == 0 and b.value("RIG_STATUS", "table_running") == 1
+
+
+def test_the_table_is_held_when_the_harness_run_ends(bench):
+    b = bench()
+    b.start()
+    b.step(n=3)
+    assert b.rig.table.running
+    b.writer.heartbeat(int(State.DONE), b.now)
+    b.service()
+    assert not b.rig.table.running, "a table left running would play on while the next harness waits idle"
+    assert any(line == "table stopped: the harness's run ended" for _, line in b.rig.journal.drain())
+    b.writer.command(0.0, False, b.now)
+    b.service(PERIOD)
+    assert b.value("RIG_STATUS", "table_running") == 0
 
 
 def test_two_commands_in_one_poll_are_two_steps(bench):

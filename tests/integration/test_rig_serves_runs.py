@@ -348,3 +348,66 @@ def test_one_rig_serves_five_runs_one_tripping_with_resets_in_between(tmp_path, 
     assert journal.count("harness TRIPPED: run ended: tripped") == 1
     assert "drive reset of ESTOP cleared (fault now NONE)" in journal, "the tripped run's E-stop latch, reset"
     assert journal.count("drive reset of HEARTBEAT_WATCHDOG cleared (fault now NONE)") == 3
+
+
+# ----------------------------------------------------------------- a table that already runs (issue 30, item 8)
+@pytest.fixture
+def rig_thread():
+    """A `harness rig` (its serving function, in a thread) on a fresh seqpacket channel: (channel, rig, journal)."""
+    channel = f"ext-{uuid.uuid4().hex[:8]}"
+    stop, ready = threading.Event(), threading.Event()
+    rigs: list[VirtualRig] = []
+    journal: list[str] = []
+
+    def serve() -> None:
+        run_rig_command(
+            PROFILES / "nceer_4dof.yaml", interface="seqpacket", channel=channel, lockstep=True,
+            options=StudyOptions(record="synthetic", duration_s=3.0),
+            overrides=[f"rig.drive.lockstep_watchdog_timeout_s={LOCKSTEP_WATCHDOG_S}"], stop_event=stop,
+            on_ready=lambda rig: (rigs.append(rig), ready.set()), on_journal=lambda _t, line: journal.append(line),
+        )
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    try:
+        assert ready.wait(60.0), "the rig did not start"
+        yield channel, rigs[0], journal
+    finally:
+        stop.set()
+        thread.join(20.0)
+
+
+def _start_table_as_another_harness(channel: str) -> None:
+    """Another harness starts the rig's table in lockstep and steps it, then leaves it running."""
+    with open_harness(CanConfig(interface="seqpacket", channel=channel)) as other:
+        other.writer.heartbeat(int(State.IDLE), 0.0)
+        other.writer.rig_control(RigCommand.START_TABLE, True, 0.0)
+        for _ in range(50):
+            other.writer.command(0.0, False, 0.0)
+            other.reader.poll(0.0, block_s=0.002)
+        time.sleep(0.2)
+
+
+def test_a_table_already_running_is_refused_before_arming_and_said_to_be_moving(rig_thread, tmp_path, capsys):
+    channel, rig, journal = rig_thread
+    _start_table_as_another_harness(channel)
+    deadline = time.monotonic() + 10.0
+    while not rig.table.running:
+        assert time.monotonic() < deadline, "the other harness did not start the table"
+        time.sleep(0.02)
+    capsys.readouterr()
+    assert _dry_run(channel, tmp_path, "--reset-drive") == 2
+    refusal = capsys.readouterr().err
+    assert "table is running" in refusal and "the table is moving" in refusal and "Refused before arming" in refusal
+    assert "harness RUNNING: run started" not in journal, "the refused run never ran"
+
+
+def test_each_run_on_one_rig_plays_its_own_record_from_the_start(rig_thread, tmp_path, capsys):
+    channel, rig, journal = rig_thread
+    assert _dry_run(channel, tmp_path) == 0, capsys.readouterr()
+    assert not rig.table.running, "the run's end holds the table it started"
+    _wait_latched(rig, DriveState.FAULT)
+    assert _dry_run(channel, tmp_path, "--reset-drive") == 0, capsys.readouterr()
+    assert journal.count("table started: record from 0 s") == 2, journal
+    assert journal.count("table stopped: the harness's run ended") == 2, journal
+    assert not any("start table refused" in line for line in journal), journal

@@ -148,3 +148,21 @@ def test_a_stall_beyond_the_budget_trips_on_the_first_tick_after_it():
     detail = [d for name, d in events if name == "loop_stall"][0]
     missed = int(re.search(r"\((\d+) missed periods\)", detail).group(1))
     assert missed in (21, 22) and "45.0 ms" in detail and "host" in detail  # counted by missed time, not one overrun
+
+
+def test_a_stall_longer_than_the_drive_watchdog_trips_loop_stall_not_drive_fault_and_logs_the_gap():
+    """Issue 30: a 101 ms stall let the drive's 50 ms heartbeat watchdog fire; the trip names the stall, with its gap."""
+    stall_s = 0.101
+    result, loop, controller, sent, events, profile = _run(stall_s)
+    assert stall_s > profile.rig.drive.watchdog_timeout_s
+    assert result.outcome == "tripped" and result.trip_reason == "loop_stall", (result.trip_reason, result.trip_detail)
+    assert "101.0 ms without a command" in result.trip_detail or "101.1 ms without a command" in result.trip_detail
+    assert "(HEARTBEAT_WATCHDOG) after it, a consequence of the stall" in result.trip_detail  # the drive did fault
+    gaps = [detail for name, detail in events if name == "stall_past_budget"]
+    assert len(gaps) == 1 and loop.gaps_past_budget == 1
+    start, end = (float(x) for x in re.search(r"from (\S+) s to (\S+) s \(loop time\)", gaps[0]).groups())
+    assert end - start == pytest.approx(loop.longest_stall_s, abs=1e-4)  # the console's "longest" is this logged gap
+    assert start == pytest.approx(controller.stalled_at, abs=1e-3)  # the tick whose controller stalled began it
+    assert "begun in RUNNING" in gaps[0]
+    assert "the loop was the estimator, the controller and the compensation for 101.0 ms (control;" in gaps[0]
+    assert result.timing["gaps_past_budget"] == 1

@@ -97,7 +97,8 @@ def test_a_sweep_case_gives_exactly_the_peaks_of_harness_simulate(tmp_path, caps
             command = [sys.executable, "-m", "harness.cli", *argv, "--json", str(path), "--quiet"]
             subprocess.run(command, env=env, check=True, capture_output=True, timeout=120)
             assert all(swept == simulated for swept, simulated in _simulated_peaks(row, json.loads(path.read_text())))
-        assert main([*argv, "--json", str(path), "--quiet"]) == 0  # this process: BLAS threads as it has them
+        # this process: BLAS threads as it has them (--force: over the subprocess's file, if any)
+        assert main([*argv, "--json", str(path), "--force", "--quiet"]) == 0
         capsys.readouterr()
         for swept, simulated in _simulated_peaks(row, json.loads(path.read_text())):
             assert swept == pytest.approx(simulated, rel=1e-9, abs=1e-15)

@@ -392,7 +392,7 @@ def test_harness_and_rig_talk_over_a_virtual_bus() -> None:
         assert hr.status.values == pytest.approx([2.0, 1.0, 0.0, -1234.0])
         assert (hr.drive_state, hr.pressure_ok, hr.fault_code, hr.measured_force_n) == (2, True, 0, -1234.0)
         assert hr.drive_ready and not hr.drive_fault
-        assert hr.sample("RIG_STATUS").values == pytest.approx([1.0, 1.0, 0.0, 12.3456, 7.0])
+        assert hr.sample("RIG_STATUS").values == pytest.approx([1.0, 1.0, 0.0, 0.0, 12.3456, 7.0])  # start_refused 0
         assert rr.command == [1.0, 2500.0] and rr.heartbeat == [3.0]
         assert rr.control == pytest.approx([1.0, 1.0, 2.0, 0.004], rel=1e-6)
         assert hr.e2e_ok() and rr.decoder.counts[RxStatus.OK] == 3 and not hr.foreign_command_seen

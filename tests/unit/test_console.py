@@ -176,7 +176,7 @@ def test_the_panel_shows_stalls_and_lateness_from_the_ring():
         console = Console(record=True, width=140)
         console.print(LiveConsole(status, 0.08, 0.1, 10_000.0, "panel title", enabled=False))
         text = console.export_text()
-    for expected in ("STOPPING", "panel title", "stalls ridden through 5, longest 7.2 ms, missed periods 6",
+    for expected in ("STOPPING", "panel title", "stalls ridden through 5, past the budget 0, longest 7.2 ms, missed periods 6",
                      "p50   443.5 us", "overruns 4", "-42.10 mm", "-2.500 kN", "fault x: é ✓"):
         assert expected in text, expected
 

@@ -29,7 +29,7 @@ from drivers.e2e import profile2_crc, protect
 from drivers.protocol_values import EstopSource
 from drivers.reader import HARNESS_RX, HarnessReader
 from drivers.seqpacket.bus import SeqPacketBus
-from drivers.seqpacket.channel import ABSTRACT_PREFIX
+from drivers.seqpacket.channel import parse_channel
 from drivers.seqpacket.wire import encode_frame
 
 CLASSIC = load_protocol()
@@ -178,7 +178,7 @@ def test_a_malformed_datagram_is_counted_by_the_bus_and_skipped(pair: tuple[SeqP
     reader = HarnessReader(receiver, CLASSIC)
     raw = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     try:
-        raw.connect(ABSTRACT_PREFIX + receiver.channel)
+        raw.connect(parse_channel(receiver.channel).address)
         deadline = time.monotonic() + 5.0
         while receiver.peer_count < 2 and time.monotonic() < deadline:  # the hub accepts it within its check interval
             receiver.recv(timeout=0.01)
@@ -193,9 +193,9 @@ def test_a_malformed_datagram_is_counted_by_the_bus_and_skipped(pair: tuple[SeqP
 
 
 def test_the_compiled_receive_counts_a_malformed_datagram_as_the_bus_does() -> None:
-    channel = f"kernel-{uuid.uuid4().hex}"
+    channel = f"@kernel-{uuid.uuid4().hex}"
     raw_hub = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-    raw_hub.bind(ABSTRACT_PREFIX + channel)
+    raw_hub.bind(parse_channel(channel).address)
     raw_hub.listen(1)
     node = can.Bus(interface="seqpacket", channel=channel)
     assert isinstance(node, SeqPacketBus)

@@ -122,3 +122,15 @@ def test_the_controller_plays_the_signal_from_the_start_of_running_and_nothing_e
     assert controller.force_N == 0.0 and controller.sliding_variable == 0.0
     controller.reset()
     assert controller.update(1.0 + 2 * period, period, meas, 0.0) == 0.0
+
+
+def test_a_band_holding_too_few_frequencies_of_the_estimate_is_refused_before_anything_moves():
+    """Issue 30: --resolution-hz 10 --band-hz 1,5 excited the actuator, then raised IndexError (no bin in the band)."""
+    from harness.identification.frf import MIN_BAND_BINS
+
+    between = Excitation("chirp", 100.0, (1.0, 5.0), 2.0, resolution_hz=10.0)  # a bin every 500/64 = 7.8 Hz
+    with pytest.raises(ExcitationError, match=r"^--resolution-hz: found 10 Hz: .*7\.81 Hz.* holds 0 of them; expected at "
+                                              r"least 10 .*--resolution-hz 0\.4 or finer"):
+        check_within_limits(between, excitation_signal(between, RATE_HZ), RATE_HZ, FORCE)
+    suggested = Excitation("chirp", 100.0, (1.0, 5.0), 40.0, resolution_hz=(5.0 - 1.0) / MIN_BAND_BINS)
+    check_within_limits(suggested, excitation_signal(suggested, RATE_HZ), RATE_HZ, FORCE)  # the way out it names works

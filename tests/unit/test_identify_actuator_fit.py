@@ -161,3 +161,18 @@ def test_with_the_feedforward_the_free_condition_gives_the_velocity_feedback_lef
     assert 0.0 < found[1] < 0.05 * expected
     # A fit that took the rig's feed-forward for the profile's would miss it by the whole difference.
     assert start.velocity_feedback_Ns_per_m() == 0.0
+
+
+def test_an_empty_section_above_determined_values_does_not_say_nothing_was_determined() -> None:
+    """Issue 30: identified.yaml said "rig.actuator: nothing determined" above the values determined in its sub-sections."""
+    from harness.identification.outputs import OverlayValue, overlay_text
+
+    text = overlay_text(["header"], {
+        "rig.actuator": [], "rig.actuator.hydraulics": [OverlayValue("force_loop_bandwidth_hz", 23.0, "1 SE")],
+        "rig.actuator.hydraulics.cylinder": [],
+    })
+    lines = text.splitlines()
+    assert "nothing determined" not in lines[1]
+    assert lines[1].startswith("# rig.actuator: none of its own keys determined") and "rig.actuator.hydraulics" in lines[1]
+    assert lines[-1].startswith("# rig.actuator.hydraulics.cylinder: nothing determined")  # and nothing below it is
+    assert yaml.safe_load(text) == {"rig": {"actuator": {"hydraulics": {"force_loop_bandwidth_hz": 23.0}}}}

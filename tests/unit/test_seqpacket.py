@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import errno
 import json
+import os
 import queue
 import select
 import socket
@@ -35,7 +36,7 @@ from drivers.seqpacket.bus import (
     WANTED_BACKLOG_FRAMES,
     SeqPacketBus,
 )
-from drivers.seqpacket.channel import ABSTRACT_PREFIX, parse_channel
+from drivers.seqpacket.channel import ABSTRACT_PREFIX, parse_channel, private_directory
 from drivers.seqpacket.wire import encode_frame
 
 REPO = Path(__file__).resolve().parents[2]
@@ -216,20 +217,25 @@ def open_(buses: list[SeqPacketBus], channel: str, **kwargs: object) -> SeqPacke
 # --- channel names ------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["harness", "@harness"])
-def test_plain_names_are_abstract_addresses(name: str) -> None:
-    addr = parse_channel(name)
-    assert addr.address == "\0shaketable-can/harness" and addr.path is None and addr.name == name
+def test_at_names_are_abstract_addresses() -> None:
+    addr = parse_channel("@harness")
+    assert addr.address == "\0shaketable-can/harness" and addr.path is None and addr.name == "@harness"
+
+
+def test_plain_names_are_sockets_in_the_private_directory() -> None:
+    addr = parse_channel("harness")
+    assert addr.private and addr.path == addr.address == os.path.join(private_directory(), "harness")
 
 
 def test_abstract_channel_leaves_no_file(
     buses: list[SeqPacketBus], channel: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.chdir(tmp_path)
+    channel = "@" + channel
     hub = open_(buses, channel)
     assert hub.is_hub and list(tmp_path.iterdir()) == []
     with open("/proc/net/unix") as table:
-        assert f"@{ABSTRACT_PREFIX[1:]}{channel}" in table.read()
+        assert f"@{ABSTRACT_PREFIX[1:]}{channel[1:]}" in table.read()
 
 
 @pytest.mark.parametrize(
@@ -238,7 +244,8 @@ def test_abstract_channel_leaves_no_file(
         ("", r"'' is not a usable name; expected a name of letters"),
         ("@", r"'@' is not a usable name"),
         ("two words", r"'two words' is not a usable name"),
-        ("x" * 93, r"93 characters; at most 92"),
+        ("@" + "x" * 93, r"93 characters; at most 92"),
+        ("x" * 93, r"over the 107 bytes a Unix socket path holds"),
         ("/no/such/directory/bus.sock", r"directory '/no/such/directory' does not exist"),
         ("/tmp/", r"names a directory"),
         ("/tmp/" + "x" * 110, r"at most 107"),
@@ -328,7 +335,7 @@ def test_malformed_datagram_is_counted_and_dropped(buses: list[SeqPacketBus], ch
     hub = open_(buses, channel)
     raw = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     try:
-        raw.connect(ABSTRACT_PREFIX + channel)
+        raw.connect(parse_channel(channel).address)
         raw.send(b"\x01\x02")  # shorter than the header
         raw.send(encode_frame(can.Message(arbitration_id=0x42, is_extended_id=False, data=b"\x07")))
         got = receive(hub, 1)

@@ -62,8 +62,10 @@ def test_a_study_expands_into_the_product_of_its_axes(tmp_path):
 def test_the_count_from_the_axes_is_the_number_of_cases_expanded(tmp_path):
     folder = tmp_path / "records"
     folder.mkdir()
-    for k, name in enumerate(("a.csv", "b.AT2", "notes.md")):  # two record files; the notes are not a record
+    for k, name in enumerate(("a.csv", "notes.md")):  # a record file; the notes are not a record
         (folder / name).write_text("t_s,accel_g\n" + "".join(f"{i * 0.01:.2f},{0.01 * k * (-1) ** i}\n" for i in range(50)))
+    at2 = "PEER\nb\nACCELERATION TIME SERIES IN UNITS OF G\nNPTS=   50, DT=  .0100 SEC\n"
+    (folder / "b.AT2").write_text(at2 + "".join(f"{0.02 * (-1) ** i}\n" for i in range(50)))  # suffix in any case
     text = BASE.replace('records: ["synthetic:1", "synthetic:2"]', 'records: ["synthetic:1", records]')
     text = text.replace("set: {control.design_stiffness_scale: [0.7, 1.3]}",
                         "set: {control.design_stiffness_scale: [0.7, 1.3]}\n  scale: {bearing.mu_delta: [0.9, 1.0, 1.1]}")
@@ -194,3 +196,32 @@ def test_white_noise_is_a_record_of_a_study_named_by_its_whole_spec(tmp_path):
     assert digests["white_noise:0.5-20"] == "white_noise:0.5-20:0.1"  # the amplitude spelled out: another default, another case
     bad = BASE.replace('records: ["synthetic:1", "synthetic:2"]', 'records: ["white_noise:20-5"]')
     assert "axes.records[0]" in str(_refused(tmp_path, bad))
+
+
+SECRET_LINE = "root:$6$very-secret-hash-that-must-not-leak-into-results:19000:0:99999:7:::"
+
+
+def test_a_record_path_naming_a_file_that_is_not_a_record_is_refused(tmp_path):
+    secret = tmp_path / "shadow"
+    secret.write_text(SECRET_LINE + "\n")
+    err = _refused(tmp_path, BASE.replace('records: ["synthetic:1", "synthetic:2"]', f'records: ["synthetic:1", "{secret}"]'))
+    assert err.key_path == "axes.records[1]"
+    assert "is not a record file" in err.detail and "secret" not in err.detail.replace(str(secret), "")
+
+
+def test_a_record_file_that_does_not_parse_is_refused_quoting_only_a_short_escaped_excerpt(tmp_path):
+    secret = tmp_path / "notes.txt"
+    secret.write_text(SECRET_LINE + "\u202e\n" + "more private text\n" * 3)  # a right-to-left override in it
+    err = _refused(tmp_path, BASE.replace('records: ["synthetic:1", "synthetic:2"]', f'records: ["synthetic:1", "{secret}"]'))
+    assert err.key_path == "axes.records[1]" and "is not a ground-motion record the loader reads" in err.detail
+    quoted = err.detail.replace(str(secret), "")
+    assert "must-not-leak" not in quoted and "\u202e" not in quoted, "at most a short, escaped excerpt of the file"
+    assert "more characters)" in quoted
+
+
+def test_the_loader_quotes_a_file_escaped_and_cut():
+    from harness.motions.loaders import EXCERPT_CHARS, excerpt
+
+    assert excerpt("a\u202eb\x1b") == "'a\\u202eb\\x1b'"
+    long = "x" * (EXCERPT_CHARS + 10)
+    assert excerpt(long) == f"'{'x' * EXCERPT_CHARS}'... (10 more characters)"

@@ -1,0 +1,82 @@
+"""A loop stall in real time is named as the stall, end to end: the harness process is stopped (SIGSTOP).
+
+The default real-time dry run, the virtual rig in its own process: once the run is RUNNING the
+test stops the harness process (not the rig) for 150 ms, three times the drive's 50 ms watchdog,
+then lets it go on. The rig's drive latches HEARTBEAT_WATCHDOG meanwhile. The run must trip
+``loop_stall`` (before issue 30 it tripped ``drive_fault``, "actuator drive reports a fault"),
+its detail must give the gap and name the drive's watchdog fault as its consequence, and
+events.jsonl must hold the gap: a ``stall_past_budget`` event with its start, end, phase and
+what the loop was doing, whose length is the "longest gap" the summary reports.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from harness import exit_codes
+
+STOP_S = 0.15
+DURATION_S = 8.0
+
+
+def _running_folder(log_dir: Path, process: subprocess.Popen, timeout_s: float = 120.0) -> Path | None:
+    """The run folder once its events say RUNNING (None if the process ended first)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and process.poll() is None:
+        for folder in log_dir.iterdir():
+            events = folder / "events.jsonl"
+            if events.exists() and '"RUNNING"' in events.read_text():
+                return folder
+        time.sleep(0.05)
+    return None
+
+
+def test_a_harness_stopped_longer_than_the_drive_watchdog_trips_loop_stall_with_its_gap(tmp_path) -> None:
+    process = subprocess.Popen(
+        [sys.executable, "-m", "harness.cli", "dry-run", "--duration", str(DURATION_S), "--quiet", "--log-dir", str(tmp_path)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={**os.environ, "COLUMNS": "120"},
+    )
+    try:
+        folder = _running_folder(tmp_path, process)
+        if folder is None:
+            out, err = process.communicate(timeout=60)
+            if process.returncode == exit_codes.INPUT_ERROR and "pre-flight" in (out + err):
+                pytest.skip("the pre-flight refused this busy host before arming: " + out.strip()[-300:])
+            pytest.fail("the run never reached RUNNING: " + out[-2000:] + err[-2000:])
+        time.sleep(0.3)
+        os.kill(process.pid, signal.SIGSTOP)
+        time.sleep(STOP_S)
+        os.kill(process.pid, signal.SIGCONT)
+        out, err = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            os.kill(process.pid, signal.SIGCONT)
+            process.kill()
+            process.wait()
+    assert process.returncode == exit_codes.TRIPPED, out + err
+    assert "tripped (loop_stall)" in out, out
+    metadata = json.loads((folder / "metadata.json").read_text())
+    assert metadata["trip_reason"] == "loop_stall"
+    events = [json.loads(line) for line in (folder / "events.jsonl").read_text().splitlines()]
+    trip = next(e["detail"] for e in events if e["kind"] == "fault" and e["name"] == "loop_stall")
+    gap_ms = float(re.search(r"the loop went (\S+) ms without a command", trip).group(1))
+    assert gap_ms >= STOP_S * 1e3
+    assert "(HEARTBEAT_WATCHDOG) after it, a consequence of the stall" in trip  # the drive's fault, named as the stall's
+    assert not any(e["name"] == "drive_fault" for e in events)
+    gaps = [e for e in events if e["name"] == "stall_past_budget"]
+    assert gaps, [e["name"] for e in events]
+    longest = metadata["summary"]["timing"]["longest_stall_s"]
+    logged = [float(re.match(r"(\S+) ms between two ticks", e["detail"]).group(1)) for e in gaps]
+    assert max(logged) == pytest.approx(longest * 1e3, abs=0.06)  # the longest gap counted is a logged one
+    stall = gaps[logged.index(max(logged))]["detail"]
+    assert "begun in RUNNING" in stall and re.search(r"from \S+ s to \S+ s \(loop time\)", stall)
+    assert re.search(r"the loop was .* for \S+ ms \((read|control|supervise|write|record|phase|wait); parts in ms:", stall)
