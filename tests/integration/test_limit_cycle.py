@@ -21,6 +21,9 @@ HIGH_HZ, TAIL_S = 30.0, (22.0, 30.0)
 #: The most of the record's RMS the tail may hold above HIGH_HZ (%).
 MAX_SHARE_PCT = 5.0
 PLAIN_LOOP = ["rig.actuator.hydraulics.feedforward.gain=0", "safety.force.velocity_feedforward_gain=0"]
+#: The oscillation detector (the backstop) would end the plain loop's run at the cycle's onset; it only
+#: indicates here, so the tail shows what it stops.
+INDICATE_OSCILLATION = ["safety.force.oscillation_action=indicate"]
 
 
 def _tail_share(overrides: list[str], record: str, pga_g: float, records_dir) -> float:
@@ -46,4 +49,4 @@ def test_the_shipped_rig_has_no_sustained_oscillation_in_the_quiet_tail(records_
 
 @pytest.mark.slow
 def test_without_the_feedforward_the_48_hz_limit_cycle_fills_the_tail(records_dir) -> None:
-    assert _tail_share(PLAIN_LOOP, "el_centro", 0.01, records_dir) > 50.0  # measured 97 %: the check can fail
+    assert _tail_share([*PLAIN_LOOP, *INDICATE_OSCILLATION], "el_centro", 0.01, records_dir) > 50.0  # measured 97 %
