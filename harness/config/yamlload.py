@@ -36,8 +36,9 @@ import yaml
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 
 #: Longest YAML text read (characters; a file is also refused beyond this many bytes). The
-#: shipped profiles are 3-7 kB and the studies about 1 kB: a thousand times the largest leaves
-#: room for any hand-written file while a mistaken file (a log, a data set) is refused at once.
+#: shipped profiles are 3-21 kB (the rig profile, with the derivations of its values in comments) and
+#: the studies about 1 kB: fifty times the largest leaves room for any hand-written file while a
+#: mistaken file (a log, a data set) is refused at once.
 MAX_YAML_CHARS = 1_000_000
 
 #: Deepest nesting of values (the top-level mapping is level 1, a value in it level 2, ...). The shipped
