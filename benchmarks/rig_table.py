@@ -20,6 +20,8 @@ Usage: python benchmarks/rig_table.py [--records-dir DIR] [--rig-effects] [--dry
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
 import sys
 import tempfile
 from pathlib import Path
@@ -177,6 +179,64 @@ def prediction_headers() -> list[str]:
     return ["quantity", *(f"{record} {pga_g:.2f} g: {name}" for record, pga_g in RIG_RECORDS for name, _ in PREDICTIONS)]
 
 
+#: The columns of the feed-forward table (issue 31): (name, overrides of the lockstep twin's profile), after ideal control.
+#: The plain loop expects the plain loop's bleed (k_h / w_f, 94 kN s/m) in its tracking check.
+FEEDFORWARD_COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("rig, no feed-forward", ("rig.actuator.hydraulics.feedforward.gain=0", "safety.force.velocity_feedforward_gain=0")),
+    ("rig, feed-forward", ()),
+)
+
+
+def feedforward_results(profile_path: Path, records_dir: str, overrides: list[str]) -> dict:
+    """Per record: ideal passive and controlled peaks, and each :data:`FEEDFORWARD_COLUMNS` case on the lockstep twin.
+
+    The twin (``harness simulate --rig-effects``) is the virtual rig's plant, actuator, sensors and
+    supervisor in lockstep (tests/integration/test_lockstep_equivalence.py holds it to a lockstep dry run).
+    """
+    results: dict = {}
+    for record, pga_g in RIG_RECORDS:
+        options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0, duration_s=30.0)
+        ideal = run_study(load_profile(profile_path, overrides=overrides), options)
+        results[record] = {"passive": ideal.cases["passive"].peaks.flatten(),
+                           IDEAL: ideal.cases["controlled"].peaks.flatten()}
+        for name, extra in FEEDFORWARD_COLUMNS:
+            profile = load_profile(profile_path, overrides=[*overrides, *extra])
+            study = run_study(profile, dataclasses.replace(options, rig_effects=True))
+            case = study.cases["controlled"]
+            tracked = study.force_tracking()["command"]
+            results[record][name] = {**case.peaks.flatten(), "outcome": case.extra.get("outcome", "-"),
+                                     "delay_ms": math.nan if tracked is None else tracked.delay_s * 1e3,
+                                     "rms_pct": math.nan if tracked is None else tracked.rms_error_percent}
+            print(f"{record} {name}: {case.extra.get('outcome')} {case.extra.get('trip_reason') or ''}", file=sys.stderr)
+    return results
+
+
+def feedforward_rows(results: dict) -> list[list[str]]:
+    """One row per quantity: per record, ideal control then each feed-forward column."""
+    names = [IDEAL, *(name for name, _ in FEEDFORWARD_COLUMNS)]
+    rows = []
+    for key, label in PREDICTED:
+        row = [label]
+        for record, _ in RIG_RECORDS:
+            passive = results[record]["passive"][key]
+            for name in names:
+                reduction = reduction_pct(passive, results[record][name][key])
+                row.append("-" if reduction is None else f"{reduction:.0f}")
+        rows.append(row)
+    extra_rows = [["sliding displacement / passive"], ["peak force % W"], ["force-tracking delay ms (command)"],
+                  ["force-tracking RMS error % (command)"], ["outcome"]]
+    for record, _ in RIG_RECORDS:
+        passive = results[record]["passive"]["sliding_displacement_m"]
+        for name in names:
+            peaks = results[record][name]
+            extra_rows[0].append(f"{peaks['sliding_displacement_m'] / passive:.2f}")
+            extra_rows[1].append(f"{peaks['peak_force_pct_weight']:.1f}")
+            extra_rows[2].append(f"{peaks['delay_ms']:.1f}" if "delay_ms" in peaks else "-")
+            extra_rows[3].append(f"{peaks['rms_pct']:.0f}" if "rms_pct" in peaks else "-")
+            extra_rows[4].append(str(peaks.get("outcome", "-")))
+    return [*rows, *extra_rows]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--profile", default=str(REPO / "profiles" / "nceer_4dof.yaml"))
@@ -190,7 +250,14 @@ def main() -> int:
     parser.add_argument("--dry-runs", action="store_true",
                         help="ideal control against lockstep dry runs on the force-source and the servo-hydraulic rig")
     parser.add_argument("--log-dir", default=None, help="where the dry runs' folders go (default: a temporary folder)")
+    parser.add_argument("--feedforward", action="store_true",
+                        help="ideal control against the lockstep twin without and with the servo controller's feed-forward")
     args = parser.parse_args()
+    if args.feedforward:
+        names = [IDEAL, *(name for name, _ in FEEDFORWARD_COLUMNS)]
+        print_markdown(feedforward_rows(feedforward_results(Path(args.profile), args.records_dir, args.overrides)),
+                       ["quantity", *(f"{record} {pga:.2f} g: {name}" for record, pga in RIG_RECORDS for name in names)])
+        return 0
     if args.dry_runs:
         with tempfile.TemporaryDirectory() as scratch:
             rows = prediction_rows(predictions(Path(args.profile), args.records_dir, args.overrides, args.log_dir or scratch))

@@ -164,9 +164,12 @@ class ActuatorModel:
     def from_rig_actuator(cls, actuator) -> ActuatorModel:
         """From a profile's ``rig.actuator`` (:class:`harness.rig.config.ActuatorConfig`).
 
-        ``servo_hydraulic``: ``k_h`` of the cylinder and ``w_f = 2 pi force_loop_bandwidth_hz``
-        (``rig.actuator.hydraulics``). ``first_order``: a force source, ``k_h = 0`` and
-        ``w_f = 1 / time_constant_s``.
+        ``servo_hydraulic``: ``w_f = 2 pi force_loop_bandwidth_hz`` and the velocity feedback
+        the servo controller leaves (``rig.actuator.hydraulics``,
+        :meth:`~harness.model.hydraulics.HydraulicActuatorConfig.velocity_feedback_Ns_per_m`):
+        with velocity feed-forward at gain ``alpha`` the term ``k_h xdot_b`` of (A1) becomes
+        ``(1 - alpha) k_h xdot_b`` (SPEC 7a'), so ``k_h`` here is ``(1 - alpha) k_h``.
+        ``first_order``: a force source, ``k_h = 0`` and ``w_f = 1 / time_constant_s``.
 
         Raises
         ------
@@ -175,7 +178,8 @@ class ActuatorModel:
         """
         if actuator.model == "servo_hydraulic":
             hydraulics = actuator.hydraulics
-            return cls(hydraulics.cylinder.hydraulic_stiffness_N_per_m, 2.0 * math.pi * hydraulics.force_loop_bandwidth_hz)
+            bandwidth = 2.0 * math.pi * hydraulics.force_loop_bandwidth_hz
+            return cls(hydraulics.velocity_feedback_Ns_per_m() * bandwidth, bandwidth)
         if actuator.model == "first_order":
             return cls(0.0, 1.0 / actuator.time_constant_s)
         raise ModelError(

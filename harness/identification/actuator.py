@@ -120,6 +120,7 @@ def identify_actuator_fit(out_dir: Path, profile: Profile, lockstep: bool) -> Ac
     loop_s = loop_delay_s(profile, lockstep)
     start = ActuatorParameters.from_config(
         hydraulics, profile.rig.actuator.delay_s + loop_s, profile.rig.sensors.velocity.delay_s,
+        profile.rig.physics_substep_s,
     )
     high_hz = float(excitation["band_hz"][1])
     held = dict(HELD)
@@ -149,6 +150,7 @@ def identify_actuator_fit(out_dir: Path, profile: Profile, lockstep: bool) -> Ac
         "valve_zeta_correlation": fit.valve_correlation,
         "bulk_modulus_Pa": bulk_modulus_Pa(fit.parameters.hydraulic_stiffness_N_per_m, hydraulics)
         if "hydraulic_stiffness_N_per_m" in fit.fitted else None,
+        "velocity_feedback_Ns_per_m": _velocity_feedback_json(fit, profile),
         "fit_error": [error.as_dict() for error in fit.errors],
         "files": {"overlay": overlay.name, "plot": plot.name},
     }
@@ -226,6 +228,21 @@ def fit_plot(measured: Measured, fit: ActuatorFit, path: Path, title: str) -> Pa
     return path
 
 
+def _velocity_feedback_json(fit: ActuatorFit, profile: Profile) -> dict[str, float] | None:
+    """``c_eff`` with its standard error, and the controller's ``m_b p1`` it is judged against (README, commissioning)."""
+    found = fit.velocity_feedback()
+    if found is None:
+        return None
+    return {"value": found[0], "standard_error": found[1], "controller_damping_Ns_per_m": controller_damping_Ns_per_m(profile)}
+
+
+def controller_damping_Ns_per_m(profile: Profile) -> float:
+    """``m_b p1`` (N s/m) of the profile's phi design: the damping the controller itself puts on the base mat."""
+    design = profile.control.designs.get("phi")
+    p1 = getattr(design, "p1_per_s", math.nan) if design is not None else math.nan
+    return profile.structure.base_mass_kg * p1
+
+
 def summary_lines(result: ActuatorIdentification) -> list[str]:
     """What the command prints: each fitted value with its error, the fit's error, what was held."""
     fit = result.fit
@@ -239,6 +256,10 @@ def summary_lines(result: ActuatorIdentification) -> list[str]:
         lines.append(f"fit error {error.condition}: magnitude {error.magnitude_rms_pct:.2f} % rms "
                      f"({error.magnitude_max_pct:.2f} % max), phase {error.phase_rms_deg:.2f} deg rms "
                      f"({error.phase_max_deg:.2f} deg max)")
+    found = fit.velocity_feedback()
+    if found is not None:
+        lines.append(f"effective velocity feedback c_eff = (1 - alpha) k_h / w_f = {found[0]:.4g} +/- {found[1]:.2g} N s/m "
+                     f"(1 SE; the servo controller's feed-forward alpha = {p.feedforward_gain:.3g})")
     lines.append("held: " + ", ".join(result.held))
     if not math.isnan(fit.valve_correlation):
         lines.append(f"correlation of valve frequency and damping if both were freed: {fit.valve_correlation:.3f}")

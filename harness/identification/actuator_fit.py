@@ -56,9 +56,10 @@ VELOCITY_FILE = "frf_velocity.csv"
 #: nonlinearity, leakage, the hold between ticks) exceeds its variance.
 COHERENCE_CAP = 0.999
 #: The fitted parameters, in the order of the fit's vector.
-FITTED = ("force_loop_bandwidth_hz", "valve_bandwidth_hz", "delay_s", "hydraulic_stiffness_N_per_m", "velocity_lag_s")
+FITTED = ("force_loop_bandwidth_hz", "valve_bandwidth_hz", "delay_s", "hydraulic_stiffness_N_per_m", "velocity_lag_s",
+          "feedforward_gain")
 #: Fitted only with a free condition.
-FREE_ONLY = ("hydraulic_stiffness_N_per_m", "velocity_lag_s")
+FREE_ONLY = ("hydraulic_stiffness_N_per_m", "velocity_lag_s", "feedforward_gain")
 #: Held at the profile's values, and why.
 HELD = {
     "valve_damping_ratio": "below the valve's natural frequency its phase is 2 zeta_v w / w_v: zeta_v and w_v trade one "
@@ -88,6 +89,12 @@ class ActuatorParameters:
     velocity_lag_s : float
         How much later the sliding velocity is measured than the load cell's force (s): the
         velocity sensors' conditioning delay (``rig.sensors.velocity.delay_s``).
+    feedforward_gain : float
+        ``alpha``, the share of ``k_h`` the servo controller's velocity feed-forward cancels (SPEC 7a');
+        fitted with a free condition when the profile's is not 0.
+    feedforward_filter_hz, feedforward_delay_s : float
+        The feed-forward's LVDT filter corner (Hz) and delay (s, the LVDT's and half a sample of
+        the backward difference): the servo controller's settings, held.
     """
 
     force_loop_bandwidth_hz: float
@@ -97,16 +104,28 @@ class ActuatorParameters:
     hydraulic_stiffness_N_per_m: float
     leakage_pole_per_s: float = 0.0
     velocity_lag_s: float = 0.0
+    feedforward_gain: float = 0.0
+    feedforward_filter_hz: float = math.inf
+    feedforward_delay_s: float = 0.0
 
     @classmethod
-    def from_config(cls, hydraulics: HydraulicActuatorConfig, delay_s: float, velocity_lag_s: float = 0.0) -> ActuatorParameters:
-        """The profile's actuator (``rig.actuator.hydraulics``) with a delay ``delay_s`` (s)."""
-        c = hydraulics.cylinder
+    def from_config(cls, hydraulics: HydraulicActuatorConfig, delay_s: float, velocity_lag_s: float = 0.0,
+                    sample_s: float = 0.0) -> ActuatorParameters:
+        """The profile's actuator (``rig.actuator.hydraulics``) with a delay ``delay_s`` (s).
+
+        ``sample_s`` is the servo controller's sample period (the rig's physics sub-step), whose half
+        the feed-forward's backward difference adds to its LVDT's delay.
+        """
+        c, feedforward = hydraulics.cylinder, hydraulics.feedforward
         return cls(
             hydraulics.force_loop_bandwidth_hz, c.valve_bandwidth_hz, c.valve_damping_ratio, delay_s,
             c.hydraulic_stiffness_N_per_m, c.hydraulic_stiffness_N_per_m * c.leakage_m3_per_s_Pa / c.piston_area_m2**2,
-            velocity_lag_s,
+            velocity_lag_s, feedforward.gain, feedforward.velocity_filter_hz, feedforward.lvdt.delay_s + 0.5 * sample_s,
         )
+
+    def velocity_feedback_Ns_per_m(self) -> float:
+        """``c_eff = (1 - alpha) k_h / w_f`` (N s/m): the force lost per m/s of stroke at low frequency and no load."""
+        return (1.0 - self.feedforward_gain) * self.hydraulic_stiffness_N_per_m / (2.0 * np.pi * self.force_loop_bandwidth_hz)
 
     def vector(self) -> np.ndarray:
         """The :data:`FITTED` values."""
@@ -132,13 +151,29 @@ def blocked_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
     return delay * gain / denominator
 
 
-def velocity_feedback_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
-    """``k_h / D(j w)``: the force the sliding velocity bleeds, per m/s (N s/m, complex); ``k_h / w_f`` at low frequency.
+def _bleed_stiffness(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
+    """``k_h (1 - alpha G_v H)``: the oil column's velocity feedback less the servo controller's feed-forward (N/m, complex).
 
-    With :func:`blocked_response` it is the whole actuator of (F1), whatever it pushes.
+    ``H`` is the feed-forward's LVDT delay and first-order filter (SPEC 7a'); 1 for a plain loop.
+    """
+    if p.feedforward_gain == 0.0:
+        return np.full(np.shape(freq_hz), p.hydraulic_stiffness_N_per_m, dtype=complex)
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    w_v = 2.0 * np.pi * p.valve_bandwidth_hz
+    valve = w_v**2 / (s**2 + 2.0 * p.valve_damping_ratio * w_v * s + w_v**2)
+    sensed = np.exp(-s * p.feedforward_delay_s) / (1.0 + s / (2.0 * np.pi * p.feedforward_filter_hz))
+    return p.hydraulic_stiffness_N_per_m * (1.0 - p.feedforward_gain * valve * sensed)
+
+
+def velocity_feedback_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
+    """``k_h (1 - alpha G_v H) / D(j w)``: the force the sliding velocity bleeds, per m/s (N s/m, complex).
+
+    ``k_h / w_f`` at low frequency for a plain loop, ``(1 - alpha) k_h / w_f`` with the servo
+    controller's velocity feed-forward. With :func:`blocked_response` it is the whole actuator of
+    (F1), whatever it pushes.
     """
     _, denominator, _ = _loop_terms(p, freq_hz)
-    return p.hydraulic_stiffness_N_per_m / denominator
+    return _bleed_stiffness(p, freq_hz) / denominator
 
 
 def free_response(p: ActuatorParameters, freq_hz: np.ndarray, velocity_response: np.ndarray) -> np.ndarray:
@@ -150,7 +185,7 @@ def free_response(p: ActuatorParameters, freq_hz: np.ndarray, velocity_response:
     """
     gain, denominator, delay = _loop_terms(p, freq_hz)
     lead = np.exp(2j * np.pi * np.asarray(freq_hz, dtype=float) * p.velocity_lag_s)
-    return (delay * gain - p.hydraulic_stiffness_N_per_m * velocity_response * lead) / denominator
+    return (delay * gain - _bleed_stiffness(p, freq_hz) * velocity_response * lead) / denominator
 
 
 def complex_response(response: FrequencyResponse) -> np.ndarray:
@@ -228,6 +263,26 @@ class ActuatorFit:
     errors: tuple[ConditionError, ...]
     valve_correlation: float = math.nan
     notes: tuple[str, ...] = field(default=())
+    covariance: np.ndarray | None = field(default=None, compare=False)
+
+    def velocity_feedback(self) -> tuple[float, float] | None:
+        """``(c_eff, standard error)`` (N s/m) from the free condition, or None without one.
+
+        ``c_eff = (1 - alpha) k_h / w_f``, its error from the fit's covariance of ``k_h``, ``w_f``
+        and ``alpha`` (the delta method: their errors are correlated).
+        """
+        if "hydraulic_stiffness_N_per_m" not in self.fitted or self.covariance is None:
+            return None
+        p = self.parameters
+        value = p.velocity_feedback_Ns_per_m()
+        omega = 2.0 * np.pi * p.force_loop_bandwidth_hz
+        partials = {
+            "hydraulic_stiffness_N_per_m": (1.0 - p.feedforward_gain) / omega,
+            "force_loop_bandwidth_hz": -value / p.force_loop_bandwidth_hz,
+            "feedforward_gain": -p.hydraulic_stiffness_N_per_m / omega,
+        }
+        gradient = np.array([partials.get(name, 0.0) for name in self.fitted])
+        return value, float(math.sqrt(max(float(gradient @ self.covariance @ gradient), 0.0)))
 
     def determined(self, name: str) -> bool:
         """True when ``name``'s relative standard error is at most :data:`DETERMINED_REL_ERROR`."""
@@ -275,6 +330,8 @@ def fit_actuator(measured: Measured, start: ActuatorParameters, hold: tuple[str,
     -------
     ActuatorFit
     """
+    if start.feedforward_gain == 0.0:  # a plain loop: nothing to fit
+        hold = (*hold, "feedforward_gain")
     names = tuple(n for n in FITTED if n not in hold and (measured.free is not None or n not in FREE_ONLY))
     index = [FITTED.index(n) for n in names]
     scale = start.vector()[index]
@@ -297,7 +354,7 @@ def fit_actuator(measured: Measured, start: ActuatorParameters, hold: tuple[str,
     if measured.free is not None and measured.velocity is not None:
         model = free_response(best, measured.free.freq_hz, complex_response(measured.velocity))
         conditions.append(condition_error("free", model, measured.free))
-    return ActuatorFit(best, errors, tuple(names), tuple(conditions), _valve_correlation(best, measured))
+    return ActuatorFit(best, errors, tuple(names), tuple(conditions), _valve_correlation(best, measured), covariance=cov)
 
 
 def _valve_correlation(p: ActuatorParameters, measured: Measured) -> float:

@@ -22,11 +22,14 @@ Any motion of the piston bleeds force unless the valve supplies the matching flo
 
 The two servo loops:
 
-- control actuator (table to base mat), force loop on the load cell:
-  ``i = K_p (u_cmd - A p_L)``, with ``K_p`` set so that the loop on a blocked piston has
-  the bandwidth ``w_f``: ``K_p = w_f V_t / (4 beta_e A q_nl)``. Disabled (tripped or not
-  armed), the spool is centred and the cross-port bypass opens, so the pressure decays
-  with the drive's decay time constant.
+- control actuator (table to base mat), force loop on the load cell with velocity
+  feed-forward (SPEC 7a', :func:`force_loop_current`, the one place the law is written):
+  ``i = K_p (u_cmd - A p_L) + i_ff``, with ``K_p`` set so that the loop on a blocked piston
+  has the bandwidth ``w_f``: ``K_p = w_f V_t / (4 beta_e A q_nl)``, and ``i_ff = alpha A v_s /
+  q_nom`` the feed-forward current from the stroke LVDT's filtered derivative
+  (:mod:`harness.model.servo_controller`), held over a sub-step in the packed parameters.
+  Disabled (tripped or not armed), the spool is centred and the cross-port bypass opens,
+  so the pressure decays with the drive's decay time constant.
 - shaking table, three-variable control of the platform (mass ``m_t``): the flow demand is
   the drive's velocity plus the displacement error through the position loop, less a
   differential-pressure (Delta-P) feedback about the pressure that accelerates the bare
@@ -49,6 +52,7 @@ import numba
 import numpy as np
 
 from harness.config.schema import quantity
+from harness.model.servo_controller import VelocityFeedforwardConfig
 
 # ------------------------------------------------------------ packed parameters
 #: Flags: the table is a servo-hydraulic platform; the control actuator is servo-hydraulic;
@@ -63,7 +67,8 @@ RELIEF_OVERPRESSURE = 0.02
 ACTUATOR_CYLINDER = 4
 ACTUATOR_GAIN = ACTUATOR_CYLINDER + _CYLINDER_SIZE  # K_p, 1/N
 ACTUATOR_BYPASS = ACTUATOR_GAIN + 1  # bypass leakage while disabled, m^3/(s Pa)
-TABLE_CYLINDER = ACTUATOR_BYPASS + 1
+ACTUATOR_FEEDFORWARD = ACTUATOR_BYPASS + 1  # the servo controller's feed-forward current, held over a sub-step
+TABLE_CYLINDER = ACTUATOR_FEEDFORWARD + 1
 TABLE_MASS = TABLE_CYLINDER + _CYLINDER_SIZE  # m_t, kg
 TABLE_POSITION_GAIN = TABLE_MASS + 1  # w_x, 1/s
 TABLE_PRESSURE_FEEDBACK = TABLE_POSITION_GAIN + 1  # C_dp, m^3/(s Pa)
@@ -133,6 +138,7 @@ class HydraulicActuatorConfig:
     force_loop_bandwidth_hz: float = quantity(
         20.0, unit="Hz", gt=0.0, le=200.0, doc="force loop bandwidth on a blocked piston; sets K_p",
     )
+    feedforward: VelocityFeedforwardConfig = field(default_factory=VelocityFeedforwardConfig)
 
     def force_gain_per_N(self) -> float:
         """``K_p = w_f V_t / (4 beta_e A q_nl)`` (1/N): normalized valve current per newton of force error."""
@@ -148,6 +154,19 @@ class HydraulicActuatorConfig:
         force loop reduces only by its own gain.
         """
         return self.cylinder.hydraulic_stiffness_N_per_m / (2.0 * math.pi * self.force_loop_bandwidth_hz)
+
+    def feedforward_current_per_m_s(self) -> float:
+        """``A / q_nl`` (s/m): the normalized valve current that passes the flow of 1 m/s of stroke at no load."""
+        return self.cylinder.piston_area_m2 / self.cylinder.valve_flow_m3_per_s
+
+    def velocity_feedback_Ns_per_m(self) -> float:
+        """``c_eff = (1 - alpha) k_h / w_f`` (N s/m): the velocity feedback left at no load with the feed-forward.
+
+        The force lost per m/s of stroke at low frequency and zero load pressure, the feed-forward
+        acting on the nominal valve gain (SPEC 7a'); :func:`harness.model.servo_controller.steady_bleed_N`
+        gives it at a load pressure.
+        """
+        return (1.0 - self.feedforward.gain) * self.loop_damping_Ns_per_m()
 
 
 @dataclass(frozen=True)
@@ -218,6 +237,16 @@ def rig_atol(pressure_Pa: float = 1.0, spool: float = 1e-7, spool_rate_per_s: fl
     """Absolute tolerances of the rig's states (order of TABLE_X ... ACTUATOR_SPOOL_RATE)."""
     cylinder = (pressure_Pa, spool, spool_rate_per_s)
     return np.array((displacement_m, velocity_m_s, *cylinder, *cylinder))
+
+
+@numba.njit(cache=True, nogil=True)
+def force_loop_current(gain_per_N: float, command_N: float, measured_N: float, feedforward: float) -> float:
+    """The servo controller's law (SPEC 7a'): ``i = K_p (u_cmd - u_meas) + i_ff`` (normalized current).
+
+    ``i_ff = alpha A v_s / q_nom`` is the velocity feed-forward
+    (:class:`harness.model.servo_controller.StrokeVelocityFeedforward`), 0 for a plain loop.
+    """
+    return gain_per_N * (command_N - measured_N) + feedforward
 
 
 @numba.njit(cache=True, nogil=True)

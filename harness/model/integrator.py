@@ -148,7 +148,9 @@ def _rig_rates(
     if rig[hy.ACTUATOR_HYDRAULIC] > 0.0:
         if rig[hy.ENABLED] > 0.0:
             area = rig[hy.ACTUATOR_CYLINDER + hy.AREA]
-            current = rig[hy.ACTUATOR_GAIN] * (u - area * y[first + hy.ACTUATOR_PRESSURE])
+            current = hy.force_loop_current(
+                rig[hy.ACTUATOR_GAIN], u, area * y[first + hy.ACTUATOR_PRESSURE], rig[hy.ACTUATOR_FEEDFORWARD],
+            )
             bypass = 0.0
         else:
             current, bypass = 0.0, rig[hy.ACTUATOR_BYPASS]

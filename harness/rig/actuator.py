@@ -30,8 +30,10 @@ import numpy as np
 from scipy.linalg import expm
 
 from harness.model import hydraulics as hy
+from harness.model.servo_controller import StrokeVelocityFeedforward
 from harness.rig.config import ActuatorConfig, RigConfig
 from harness.rig.grid import half_up
+from harness.rig.truth import true_hydraulics
 
 if TYPE_CHECKING:
     from harness.rig.table import TablePlant
@@ -167,7 +169,8 @@ class HydraulicActuator:
         The table and plant whose state holds the cylinder (built with this actuator's hydraulics).
     """
 
-    def __init__(self, config: ActuatorConfig, substep_s: float, table: TablePlant):
+    def __init__(self, config: ActuatorConfig, substep_s: float, table: TablePlant,
+                 feedforward: StrokeVelocityFeedforward | None = None):
         self.config = config
         self.substep_s = float(substep_s)
         self.table = table
@@ -175,11 +178,16 @@ class HydraulicActuator:
         self.delay_substeps = self._delay.delay_substeps
         self._max_step_N = config.force_rate_limit_N_per_s * self.substep_s
         self.command_N = 0.0
+        #: The servo controller's velocity feed-forward (SPEC 7a'); None: a plain force loop.
+        self.feedforward = feedforward
+        self._primed = False
 
     def reset(self) -> None:
         """Zero the command and the delay line (the plant's reset zeroes the pressure)."""
         self.command_N = 0.0
         self._delay.reset()
+        self._primed = False
+        self.table.rig_params[hy.ACTUATOR_FEEDFORWARD] = 0.0
 
     @property
     def force_N(self) -> float:
@@ -198,12 +206,36 @@ class HydraulicActuator:
         """
         command = slew_and_clamp(self.command_N, self._delay.push(command_N), self._max_step_N, self.config.force_limit_N)
         self.command_N = command if enabled else 0.0
-        self.table.rig_params[hy.ENABLED] = 1.0 if enabled else 0.0
+        params = self.table.rig_params
+        params[hy.ENABLED] = 1.0 if enabled else 0.0
+        if self.feedforward is not None:  # the servo controller samples its stroke LVDT every sub-step, enabled or not
+            stroke = self.table.stroke_m()
+            if not self._primed:
+                self.feedforward.reset(stroke)
+                self._primed = True
+            current = self.feedforward.update(stroke)
+            params[hy.ACTUATOR_FEEDFORWARD] = current if enabled else 0.0
         return self.force_N
 
 
-def make_actuator(config: RigConfig, substep_s: float, table: TablePlant) -> ServoActuator | HydraulicActuator:
+def make_feedforward(config: RigConfig, substep_s: float, seed: int | None = None) -> StrokeVelocityFeedforward | None:
+    """The rig's servo controller's velocity feed-forward, or None when its true gain is 0.
+
+    The gain is the rig's (``rig.truth.actuator.feedforward_gain`` over the believed one), the
+    nominal valve gain ``A / q_nl`` the believed cylinder's (SPEC 7a'). The LVDT's noise has
+    its own stream of ``seed`` (default ``rig.seed``), apart from the sensors'.
+    """
+    believed = config.actuator.hydraulics
+    true = true_hydraulics(believed, config.truth.actuator)
+    if true.feedforward.gain == 0.0:
+        return None
+    rng = np.random.default_rng(np.random.SeedSequence(config.seed if seed is None else seed).spawn(3)[2])
+    return StrokeVelocityFeedforward(true.feedforward, believed.feedforward_current_per_m_s(), substep_s, rng)
+
+
+def make_actuator(config: RigConfig, substep_s: float, table: TablePlant,
+                  seed: int | None = None) -> ServoActuator | HydraulicActuator:
     """The rig's actuator model: a force source, or the servo-hydraulic cylinder in ``table``'s plant."""
     if config.actuator.model == "servo_hydraulic":
-        return HydraulicActuator(config.actuator, substep_s, table)
+        return HydraulicActuator(config.actuator, substep_s, table, make_feedforward(config, substep_s, seed))
     return ServoActuator(config.actuator, substep_s, config.drive.decay_time_constant_s)

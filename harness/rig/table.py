@@ -136,6 +136,11 @@ class TablePlant:
         """The live plant's time (s): record time while the table plays, else the rig's."""
         return self.record_time_s if self.running else self._held_time_s
 
+    def stroke_m(self) -> float:
+        """The control actuator's stroke now, the sliding displacement ``x_b = y_b - x_0`` (m)."""
+        x0, _ = self.live.table_now(self.time_s)
+        return float(self.live.y[self._i_yb] - x0)
+
     def _motion(self, force_N: float) -> tuple[float, float, float, float]:
         """Achieved table ``(x_0, xd_0, xdd_0)`` and the base mat's acceleration now, ``force_N`` as in :meth:`advance`."""
         live, t = self.live, self.time_s

@@ -43,6 +43,7 @@ from harness.errors import ProfileError
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, fixed_base_modes
 from harness.model.hydraulics import CylinderConfig, HydraulicActuatorConfig
+from harness.model.servo_controller import VelocityFeedforwardConfig
 
 #: Key path of the section in a profile, for messages.
 TRUTH_KEY = "rig.truth"
@@ -92,10 +93,15 @@ class ActuatorTruth:
     ``rig.actuator`` is what the lab believes of its actuator (the class of equipment, or an
     identification's overlay); these values are the rig's, hidden from everything but the
     virtual rig's plant and ``simulate --rig-effects``' twin. The force loop's gain ``K_p``
-    follows the true cylinder: a lab tunes it on its rig to ``force_loop_bandwidth_hz``.
+    follows the true cylinder: a lab tunes it on its rig to ``force_loop_bandwidth_hz``. The
+    servo controller's velocity feed-forward keeps the believed nominal valve gain ``A / q_nl``
+    (SPEC 7a'): ``feedforward_gain`` is the fraction the rig's controller is really set to, and
+    a true ``valve_flow_m3_per_s`` that differs leaves the mismatch in the plant.
     """
 
     force_loop_bandwidth_hz: float | None = _like(HydraulicActuatorConfig, "force_loop_bandwidth_hz")
+    feedforward_gain: float | None = _like(VelocityFeedforwardConfig, "gain")
+    valve_flow_m3_per_s: float | None = _like(CylinderConfig, "valve_flow_m3_per_s")
     bulk_modulus_Pa: float | None = _like(CylinderConfig, "bulk_modulus_Pa")
     valve_bandwidth_hz: float | None = _like(CylinderConfig, "valve_bandwidth_hz")
     valve_damping_ratio: float | None = _like(CylinderConfig, "valve_damping_ratio")
@@ -123,14 +129,18 @@ def true_hydraulics(believed: HydraulicActuatorConfig, truth: ActuatorTruth | No
         return believed
     changes = given(truth)
     bandwidth_hz = changes.pop("force_loop_bandwidth_hz", believed.force_loop_bandwidth_hz)  # the loop's; the rest the cylinder's
+    feedforward_gain = changes.pop("feedforward_gain", believed.feedforward.gain)
     try:
         return dataclasses.replace(believed, force_loop_bandwidth_hz=bandwidth_hz,
+                                   feedforward=dataclasses.replace(believed.feedforward, gain=feedforward_gain),
                                    cylinder=dataclasses.replace(believed.cylinder, **changes))
     except ValueError as err:
         raise ProfileError(str(err), None, f"{TRUTH_KEY}.actuator") from err
 
 
 def _believed_value(believed: HydraulicActuatorConfig, key: str) -> Any:
+    if key == "feedforward_gain":
+        return believed.feedforward.gain
     return getattr(believed, key) if key == "force_loop_bandwidth_hz" else getattr(believed.cylinder, key)
 
 

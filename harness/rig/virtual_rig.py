@@ -122,7 +122,7 @@ class VirtualRig:
         self._force_rng = np.random.default_rng(seeds[1])
         self.table = TablePlant(parts.building, parts.bearing, motion, parts.rtol, cfg)
         self.sensors = SensorModel(cfg.sensors, self.h, 3.0 + MAX_EXTRA_DELAY_S, np.random.default_rng(seeds[0]))
-        self.actuator = make_actuator(cfg, self.h, self.table)
+        self.actuator = make_actuator(cfg, self.h, self.table, seed)
         self.drive = Drive(cfg.drive.watchdog_timeout_s)
         self.faults = FaultSet(schedule_from(cfg.faults))
         self.publisher = RigPublisher(writer, self.faults, self.sensors)

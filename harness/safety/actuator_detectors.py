@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from drivers.protocol_values import fault_name
+from harness.model.servo_controller import steady_bleed_N
 from harness.safety.comms_detectors import FlagDetector
 from harness.safety.config import ActuatorConfig, ForceConfig
 from harness.safety.detector_base import TIME_EPS_S, Detector, LowPass, Persistence
@@ -85,16 +86,26 @@ class ActuatorStatusStale(Detector):
         return self.detail(health) if self.update(0.0, 0.0, health) else ""
 
 
+#: Largest share of ``A p_s`` the force-tracking model's orifice factor takes the load cell's force at.
+_MAX_LOAD_RATIO = 2.0 / 3.0
+
+
 class ForceTracking(Detector):
     """The actuator does not follow the commanded force.
 
     The expected force is the force commanded on the previous tick (the supervisor writes it
-    to :attr:`command_N` before each update), less the actuator's natural velocity feedback
-    ``velocity_feedback_Ns_per_m`` times the measured sliding velocity, through a first-order
-    lag with ``actuator_time_constant_s`` (none when 0): the low-frequency model of a
-    servo-hydraulic actuator under a proportional force loop (docs/SAFETY.md, "Force tracking
-    of a servo-hydraulic actuator"); with no velocity feedback, a force source. The action is
-    ``tracking_action``; a reset is never refused (the error is not knowable from one sample).
+    to :attr:`command_N` before each update), less the velocity feedback the actuator's servo
+    controller leaves at the measured sliding velocity ``v``, through a first-order lag with
+    ``actuator_time_constant_s`` (none when 0): the low-frequency model of a servo-hydraulic
+    actuator under a proportional force loop with velocity feed-forward (docs/SAFETY.md, "Force
+    tracking of a servo-hydraulic actuator"),
+
+        bleed = c v (1 / s - alpha),   s = sqrt(1 - sign(v) u / (A p_s))
+
+    with ``c = velocity_feedback_Ns_per_m``, ``alpha = velocity_feedforward_gain``, ``u`` the
+    load cell's force held to +-2/3 of ``A p_s = supply_force_N`` (``s = 1`` when that is null);
+    with no velocity feedback, a force source. The action is ``tracking_action``; a reset is
+    never refused (the error is not knowable from one sample).
     """
 
     NAME = "force_tracking"
@@ -103,7 +114,8 @@ class ForceTracking(Detector):
     BOUND = "tracking_time_s after the error exceeds the tolerance"
     RESET = "explicit reset; filter and timer cleared"
 
-    __slots__ = ("tolerance_N", "command_N", "_lag", "_timer", "_error_N", "_feedback_Ns_per_m", "_target_N")
+    __slots__ = ("tolerance_N", "command_N", "_lag", "_timer", "_error_N", "_feedback_Ns_per_m", "_target_N",
+                 "_feedforward_gain", "_supply_force_N")
 
     def __init__(self, config: ForceConfig) -> None:
         super().__init__(ACTION_BY_NAME[config.tracking_action])
@@ -113,15 +125,29 @@ class ForceTracking(Detector):
         self._timer = Persistence(config.tracking_time_s)
         self._error_N = 0.0
         self._feedback_Ns_per_m = config.velocity_feedback_Ns_per_m
+        self._feedforward_gain = config.velocity_feedforward_gain
+        self._supply_force_N = config.supply_force_N
         self._target_N = 0.0
 
     def expected_N(self) -> float:
         """The force the actuator should show now (N)."""
         return self._target_N if self._lag is None else self._lag.y
 
+    def bleed_N(self, sliding_velocity_m_s: float, force_N: float) -> float:
+        """The force the actuator loses at ``sliding_velocity_m_s`` while giving ``force_N`` (N).
+
+        The load ratio ``u / (A p_s)`` is held to +-2/3 (the working force of a cylinder sized at
+        2/3 supply), so a load cell reading beyond it cannot claim an unbounded bleed.
+        """
+        if self._supply_force_N is None:
+            return (1.0 - self._feedforward_gain) * self._feedback_Ns_per_m * sliding_velocity_m_s
+        held = min(max(force_N, -_MAX_LOAD_RATIO * self._supply_force_N), _MAX_LOAD_RATIO * self._supply_force_N)
+        return steady_bleed_N(self._feedback_Ns_per_m, sliding_velocity_m_s, held, self._supply_force_N,
+                              self._feedforward_gain)
+
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
         """True once the tracking error has persisted for ``tracking_time_s``."""
-        self._target_N = self.command_N - self._feedback_Ns_per_m * health.meas.sliding_velocity_m_s
+        self._target_N = self.command_N - self.bleed_N(health.meas.sliding_velocity_m_s, health.measured_force_N)
         if self._lag is not None:
             self._lag.update(self._target_N, dt)
         self._error_N = health.measured_force_N - self.expected_N()

@@ -48,6 +48,14 @@ class ForceConfig:
         0.0, unit="N*s/m", ge=0, le=1.0e6,
         doc="force the actuator loses per m/s of sliding velocity (k_h / w_f of a servo-hydraulic force loop; 0: a force source)",
     )
+    velocity_feedforward_gain: float = quantity(
+        0.0, ge=0.0, le=1.5,
+        doc="share alpha of velocity_feedback_Ns_per_m the servo controller's velocity feed-forward cancels (0: none)",
+    )
+    supply_force_N: float | None = quantity(
+        None, unit="N", gt=0,
+        doc="A p_s of the actuator, where the valve's pressure drop vanishes (null: the orifice's dependence left out)",
+    )
     tracking_action: DetectorActionName = field(default="trip", metadata={"doc": "action on a force-tracking fault"})
     actuator_rating_N: float | None = quantity(
         None, unit="N", gt=0, doc="rated force of the real rig's actuator; max_force_N may not exceed it (null: not declared)",
@@ -228,7 +236,8 @@ def _positive_problems(config: SafetyConfig) -> list[str]:
         "comms": config.comms, "actuator": config.actuator, "run": config.run, "estop": config.estop,
     }
     may_be_zero = {
-        "stop_time_s", "actuator_time_constant_s", "velocity_feedback_Ns_per_m", "max_e2e_rejects", "max_error_frames",
+        "stop_time_s", "actuator_time_constant_s", "velocity_feedback_Ns_per_m", "velocity_feedforward_gain",
+        "max_e2e_rejects", "max_error_frames",
         "max_send_failures",
     }
     for group_name, group in groups.items():

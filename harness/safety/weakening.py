@@ -52,6 +52,8 @@ DIRECTIONS: dict[str, Direction] = {
     "force.tracking_time_s": "larger",
     "force.actuator_time_constant_s": "smaller",  # a faster claimed actuator widens the stall budget
     "force.velocity_feedback_Ns_per_m": "larger",  # a larger claimed force deficit at speed hides more of a real one
+    "force.velocity_feedforward_gain": "smaller",  # a smaller claimed cancellation claims a larger deficit at speed
+    "force.supply_force_N": "smaller",  # a smaller A p_s claims a larger deficit when the force pushes along the stroke
     "force.tracking_action": "milder",
     "force.actuator_rating_N": "larger",  # None (no rating declared) is the weakest
     "force.oscillation_corner_hz": "larger",  # a higher corner hides a limit cycle between the two

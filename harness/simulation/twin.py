@@ -161,7 +161,7 @@ class _TwinRig:
         rng = np.random.default_rng(rig.seed if seed is None else seed)
         self.sensors = SensorModel(rig.sensors, self.substep_s, _MAX_SENSOR_DELAY_S, rng)
         self.sensors.set_delays(asynchronous_delay_s, self.substeps_per_sample if lockstep else None)
-        self.actuator = make_actuator(rig, self.substep_s, self.table)
+        self.actuator = make_actuator(rig, self.substep_s, self.table, seed)
         self.truth = np.zeros(len(SIGNALS))
         #: The latest reading of each sensor message (SI, DBC signal order); story readings hold between their samples.
         self.readings = tuple([0.0] * len(columns) for columns in MESSAGE_COLUMNS)

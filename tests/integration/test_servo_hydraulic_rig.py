@@ -64,8 +64,10 @@ def _frf(path: Path) -> dict[str, np.ndarray]:
 @pytest.mark.slow
 def test_the_free_actuator_shows_the_interaction_the_blocked_one_does_not(tmp_path) -> None:
     # Large enough to slide the base mat past its bearings' friction, slow enough for the rate limit.
+    # A servo controller without velocity feed-forward (SPEC 7a'): the whole natural velocity feedback.
     status = main(["identify", "actuator", "--out", str(tmp_path), "--both", "--quiet", "--amplitude-N", "6000",
-                   "--band-hz", "0.5,10", "--duration", "24"])
+                   "--band-hz", "0.5,10", "--duration", "24", "--set", "rig.actuator.hydraulics.feedforward.gain=0",
+                   "--set", "safety.force.velocity_feedforward_gain=0", "--allow-weaker-safety"])
     assert status == exit_codes.OK
     free, blocked = _frf(tmp_path / "frf.csv"), _frf(tmp_path / "frf_blocked.csv")
     assert np.allclose(free["freq_hz"], blocked["freq_hz"])

@@ -30,11 +30,14 @@ from harness.profile import load_profile
 PERIOD_S = 0.002
 #: Actuator model errors the designs must survive: k_h and w_f each off by -30 %, 0, +30 %.
 MODEL_ERRORS = list(itertools.product((0.7, 1.0, 1.3), (0.7, 1.0, 1.3)))
+#: The actuator-aware designs are for a servo controller without velocity feed-forward, whose force
+#: loop leaves the whole natural velocity feedback (SPEC 7a'); the shipped profile's cancels it.
+PLAIN_LOOP = ["rig.actuator.hydraulics.feedforward.gain=0", "safety.force.velocity_feedforward_gain=0"]
 
 
 @pytest.fixture(scope="module")
 def profile():
-    return load_profile(None)
+    return load_profile(None, overrides=PLAIN_LOOP)
 
 
 @pytest.fixture(scope="module")
@@ -104,12 +107,18 @@ def test_the_actuator_model_comes_from_the_profiles_rig(profile, actuator):
     hydraulics = profile.rig.actuator.hydraulics
     assert actuator.stiffness_N_per_m == pytest.approx(hydraulics.cylinder.hydraulic_stiffness_N_per_m)
     assert actuator.loop_damping_Ns_per_m == pytest.approx(hydraulics.loop_damping_Ns_per_m())
-    stiffer = load_profile(None, overrides=["rig.actuator.hydraulics.cylinder.bulk_modulus_Pa=1.3e9"])
+    stiffer = load_profile(None, overrides=[*PLAIN_LOOP, "rig.actuator.hydraulics.cylinder.bulk_modulus_Pa=1.3e9"])
     controller = make_controller(stiffer, "phi-A")
     assert isinstance(controller, ActuatorOutputSMC)
     assert controller.actuator.stiffness_N_per_m == pytest.approx(1.3 * actuator.stiffness_N_per_m)
     force_source = load_profile(None, variant="force_source")
     assert ActuatorModel.from_rig_actuator(force_source.rig.actuator) == ActuatorModel(0.0, 100.0)  # 1 / 10 ms
+    # The servo controller's velocity feed-forward at alpha leaves (1 - alpha) of the velocity feedback.
+    shipped = ActuatorModel.from_rig_actuator(load_profile(None).rig.actuator)
+    assert shipped.stiffness_N_per_m == 0.0 and shipped.bandwidth_rad_s == actuator.bandwidth_rad_s
+    half = load_profile(None, overrides=["rig.actuator.hydraulics.feedforward.gain=0.5"])
+    assert ActuatorModel.from_rig_actuator(half.rig.actuator).loop_damping_Ns_per_m == pytest.approx(
+        0.5 * actuator.loop_damping_Ns_per_m)
 
 
 def test_an_actuator_model_the_first_order_form_does_not_describe_is_refused():

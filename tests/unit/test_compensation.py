@@ -37,6 +37,9 @@ from tests.unit.test_control_tick import PERIOD_S, Bench
 
 #: The shipped rig's actuator (profiles/nceer_4dof.yaml): k_h = 11.8 MN/m, w_f = 2 pi 20 Hz.
 ACTUATOR = ActuatorModel(11.8e6, 2.0 * math.pi * 20.0)
+#: A servo controller without velocity feed-forward (SPEC 7a'), what harness-side compensation is for:
+#: the shipped profile's feed-forward leaves the flow term nothing to add.
+PLAIN_LOOP = ["rig.actuator.hydraulics.feedforward.gain=0", "safety.force.velocity_feedforward_gain=0"]
 DT = 0.002
 
 
@@ -152,9 +155,14 @@ def test_a_correction_gain_above_a_quarter_of_the_bandwidth_is_refused() -> None
 # ---------------------------------------------------------------- the profile key
 def test_the_profile_key_builds_each_method_and_none_is_the_default() -> None:
     assert isinstance(make_compensator(load_profile(None)), NoCompensation)
-    compensator = make_compensator(load_profile(None, overrides=["control.compensation=model"]))
+    compensator = make_compensator(load_profile(None, overrides=["control.compensation=model",
+                                                                  "rig.actuator.hydraulics.feedforward.gain=0"]))
     assert isinstance(compensator, ModelCompensator)
-    assert compensator.actuator.loop_damping_Ns_per_m == pytest.approx(94_000.0, rel=0.01)  # rig.actuator's
+    assert compensator.actuator.loop_damping_Ns_per_m == pytest.approx(94_000.0, rel=0.01)  # rig.actuator's plain loop
+    # The servo controller's feed-forward (the shipped profile's, alpha = 1) leaves the flow term nothing to add.
+    shipped = make_compensator(load_profile(None, overrides=["control.compensation=model"]))
+    assert isinstance(shipped, ModelCompensator)
+    assert shipped.actuator.loop_damping_Ns_per_m == 0.0
     with pytest.raises(ProfileError, match="control.compensation"):
         load_profile(None, overrides=["control.compensation=magic"])
 
@@ -247,7 +255,7 @@ def test_the_tick_hands_the_compensators_flags_to_the_supervisor(bench) -> None:
 
 def test_the_supervisor_clamps_the_compensated_command_not_the_controllers_force(bench) -> None:
     b = bench()
-    profile = load_profile(None, overrides=["control.compensation=model"])
+    profile = load_profile(None, overrides=[*PLAIN_LOOP, "control.compensation=model"])
     b.tick.compensator = make_compensator(profile)
     b.controller.force_N = 9_000.0  # below the 10 kN limit, but not with the flow term added
     b.run_until_running()
@@ -261,7 +269,7 @@ def test_the_supervisor_clamps_the_compensated_command_not_the_controllers_force
 
 
 def test_a_compensator_on_the_wrong_actuator_model_trips_compensation_fault_and_force_tracking_stays_quiet() -> None:
-    profile = load_profile(None, overrides=["record.duration_s=10"])
+    profile = load_profile(None, overrides=[*PLAIN_LOOP, "record.duration_s=10"])
     motion = prepare_motion(profile)
     wrong = ActuatorModel.from_rig_actuator(profile.rig.actuator).scaled(stiffness=0.5)  # half the rig's k_h
     compensator = ModelCompensator(wrong, profile.control.compensator.model)
@@ -269,7 +277,7 @@ def test_a_compensator_on_the_wrong_actuator_model_trips_compensation_fault_and_
                           compensator=compensator)
     assert result.extra["outcome"] == "tripped" and result.extra["trip_reason"] == "compensation_fault"
     # the same run with the rig's own model completes: the trip is the model's error, not the record's
-    right = make_compensator(load_profile(None, overrides=["record.duration_s=10", "control.compensation=model"]))
+    right = make_compensator(load_profile(None, overrides=[*PLAIN_LOOP, "record.duration_s=10", "control.compensation=model"]))
     healthy = run_rig_twin(profile, motion, profile.control.rate_hz, build_controller_for_rig(profile, "phi"), compensator=right)
     assert healthy.extra["outcome"] == "completed" and healthy.extra["compensation"] == "model"
 
@@ -381,24 +389,24 @@ def test_the_adaptive_compensator_allocates_nothing_per_tick() -> None:
 
 
 def test_a_rig_outside_the_adaptive_bounds_trips_compensation_fault_on_the_twin() -> None:
-    overrides = ["record.duration_s=10", "control.compensation=adaptive", "control.compensator.adaptive.start=none",
+    overrides = [*PLAIN_LOOP, "record.duration_s=10", "control.compensation=adaptive", "control.compensator.adaptive.start=none",
                  "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]  # the rig's k_h / w_f is 94 kN s/m
     profile = load_profile(None, overrides=overrides)
     result = run_rig_twin(profile, prepare_motion(profile), profile.control.rate_hz, build_controller_for_rig(profile, "phi"))
     assert result.extra["outcome"] == "tripped" and result.extra["trip_reason"] == "compensation_fault"
-    healthy = load_profile(None, overrides=overrides[:2])
+    healthy = load_profile(None, overrides=overrides[:4])
     result = run_rig_twin(healthy, prepare_motion(healthy), healthy.control.rate_hz, build_controller_for_rig(healthy, "phi"))
     assert result.extra["outcome"] == "completed" and result.extra["compensation"] == "adaptive"
 
 
 def test_the_adaptive_compensator_starts_from_the_actuator_model_or_from_none() -> None:
-    from_model = make_compensator(load_profile(None, overrides=["control.compensation=adaptive"]))
+    from_model = make_compensator(load_profile(None, overrides=[*PLAIN_LOOP, "control.compensation=adaptive"]))
     assert isinstance(from_model, AdaptiveCompensator)
     assert tuple(from_model.coefficients) == pytest.approx((1.0, 1.0 / ACTUATOR.bandwidth_rad_s, 94_000.0), rel=0.01)
     from_none = make_compensator(load_profile(None, overrides=["control.compensation=adaptive",
                                                                "control.compensator.adaptive.start=none"]))
     assert tuple(from_none.coefficients) == (1.0, 0.0, 0.0)
-    outside = ["control.compensation=adaptive", "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]
+    outside = [*PLAIN_LOOP, "control.compensation=adaptive", "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]
     with pytest.raises(ProfileError, match="outside its bounds"):
         make_compensator(load_profile(None, overrides=outside))
 

@@ -23,7 +23,8 @@ from harness.identification.frf import FrequencyResponse, write_frf_csv
 from harness.identification.run_signals import IdentificationError
 from harness.profile import load_profile
 
-PROFILE = load_profile()
+#: A servo controller without velocity feed-forward: the whole k_h shows in the free condition.
+PROFILE = load_profile(overrides=["rig.actuator.hydraulics.feedforward.gain=0", "safety.force.velocity_feedforward_gain=0"])
 HYDRAULICS = PROFILE.rig.actuator.hydraulics
 #: The rig as the data have it: force loop, valve and bulk modulus away from the profile's.
 TRUE = dataclasses.replace(
@@ -143,6 +144,23 @@ def test_a_free_response_without_its_velocity_response_is_refused(tmp_path) -> N
         read_measured(tmp_path, 20.0)
     with pytest.raises(IdentificationError, match="no frf_blocked.csv or frf.csv"):
         read_measured(tmp_path / "nothing", 20.0)
+
+
+def test_with_the_feedforward_the_free_condition_gives_the_velocity_feedback_left() -> None:
+    # The profile believes full feed-forward; the rig's servo controller is set to 0.6 of it.
+    shipped = load_profile().rig.actuator.hydraulics
+    start = ActuatorParameters.from_config(shipped, 0.002, 0.001, sample_s=0.0005)
+    true = dataclasses.replace(TRUE, feedforward_gain=0.6, feedforward_filter_hz=start.feedforward_filter_hz,
+                               feedforward_delay_s=start.feedforward_delay_s)
+    fit = fit_actuator(_measured(true, 80.0), start)
+    assert "feedforward_gain" in fit.fitted
+    found = fit.velocity_feedback()
+    assert found is not None
+    expected = true.velocity_feedback_Ns_per_m()  # 0.4 x 1.3 k_h / (2 pi 23 Hz)
+    assert found[0] == pytest.approx(expected, rel=0.03)
+    assert 0.0 < found[1] < 0.05 * expected
+    # A fit that took the rig's feed-forward for the profile's would miss it by the whole difference.
+    assert start.velocity_feedback_Ns_per_m() == 0.0
 
 
 def test_an_empty_section_above_determined_values_does_not_say_nothing_was_determined() -> None:

@@ -167,7 +167,10 @@ def test_the_shipped_profile_has_a_usable_rig_section():
     assert abs(period / rig.physics_substep_s - round(period / rig.physics_substep_s)) < 1e-9
     assert rig.actuator.model == "servo_hydraulic" and rig.table.model == "servo_hydraulic"
     assert rig.actuator.force_limit_N <= 30_000.0
-    # The tracking check expects the shipped actuator's own velocity feedback, k_h / w_f.
-    assert profile.safety.force.velocity_feedback_Ns_per_m == pytest.approx(
-        rig.actuator.hydraulics.loop_damping_Ns_per_m(), rel=0.01)
+    # The tracking check expects the velocity feedback the shipped servo controller leaves:
+    # k_h / w_f, the share alpha its velocity feed-forward cancels and the orifice's A p_s (SPEC 7a').
+    force, hydraulics = profile.safety.force, rig.actuator.hydraulics
+    assert force.velocity_feedback_Ns_per_m == pytest.approx(hydraulics.loop_damping_Ns_per_m(), rel=0.01)
+    assert force.velocity_feedforward_gain == hydraulics.feedforward.gain
+    assert force.supply_force_N == pytest.approx(hydraulics.cylinder.force_capacity_N, rel=0.01)
     assert rig.sensors.displacement.noise_std_m > 0 and rig.faults == ()
