@@ -120,7 +120,7 @@ class SensorConfig:
     # A polarity fault the sign check cannot see: a damper on the wrong sensor holds the base mat
     # below sign_flip_floor_m_s (docs/SAFETY.md, "A sign flip held below the floor: sensor_polarity").
     polarity_floor_m_s: float = quantity(
-        0.0005, unit="m/s", gt=0, le=1.0,
+        0.00025, unit="m/s", gt=0, le=1.0,
         doc="sqrt of -mean(filtered dx/dt * filtered v) beyond which a pair's polarity is wrong",
     )
     polarity_window_s: float = quantity(
