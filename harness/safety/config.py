@@ -338,10 +338,11 @@ def _force_problems(force: ForceConfig, run: RunConfig) -> list[str]:
             f"force.tracking_tolerance_N ({force.tracking_tolerance_N:g} N) is at least twice force.max_force_N "
             f"({force.max_force_N:g} N): the tracking detector could never act"
         )
-    if force.load_cell_limit_N <= force.max_force_N:
+    healthy_N = force.max_force_N + force.tracking_tolerance_N
+    if force.load_cell_limit_N <= healthy_N:
         problems.append(
-            f"force.load_cell_limit_N ({force.load_cell_limit_N:g} N) is not above force.max_force_N "
-            f"({force.max_force_N:g} N): a healthy run at its setpoint limit would trip load_cell_limit"
+            f"force.load_cell_limit_N ({force.load_cell_limit_N:g} N) is not above force.max_force_N + "
+            f"force.tracking_tolerance_N ({healthy_N:g} N): a healthy run at its setpoint limit would trip load_cell_limit"
         )
     if force.supply_force_N is not None and force.max_force_N + force.max_flow_term_N > force.supply_force_N * (1 + 1e-9):
         problems.append(

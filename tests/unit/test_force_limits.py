@@ -132,8 +132,9 @@ def test_the_profile_must_put_the_load_cell_limit_above_max_force_and_the_comman
     def problems(**changes: float) -> list[str]:
         return check_config(SafetyConfig(force=dataclasses.replace(FORCE, **changes)))
 
-    assert any("load_cell_limit_N" in p for p in problems(load_cell_limit_N=MAX))
-    assert not any("load_cell_limit_N" in p for p in problems(load_cell_limit_N=MAX + 1.0))
+    healthy = MAX + FORCE.tracking_tolerance_N
+    assert any("load_cell_limit_N" in p for p in problems(load_cell_limit_N=healthy))
+    assert not any("load_cell_limit_N" in p for p in problems(load_cell_limit_N=healthy + 1.0))
     supply = MAX + FLOW
     assert not any("max_flow_term_N" in p for p in problems(supply_force_N=supply))
     assert any("max_flow_term_N" in p for p in problems(supply_force_N=supply - 1.0))
