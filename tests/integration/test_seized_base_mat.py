@@ -103,7 +103,7 @@ CASES = {
 }
 
 
-#: 0.24 m/s: the peak sliding velocity of El Centro 0.34 g on the shipped rig (lockstep dry run, 12 s, ``model``).
+#: 0.24 m/s: the peak sliding velocity of the default dry run (synthetic 0.34 g, lockstep, 12 s, ``model``).
 @pytest.mark.parametrize("velocity_m_s", [0.05, 0.1, 0.2, 0.24])
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_a_base_mat_that_seizes_at_peak_sliding_velocity_stays_within_the_derived_bound(case: str, velocity_m_s: float):
@@ -115,7 +115,8 @@ def test_a_base_mat_that_seizes_at_peak_sliding_velocity_stays_within_the_derive
 
 
 def test_the_load_cell_limit_trips_a_seize_that_carries_the_load_cell_beyond_it():
-    """At the measured peak sliding velocity, 0.24 m/s, with the rig's feed-forward the blocked piston passes load_cell_limit_N: the check trips it."""
+    """At the measured peak sliding velocity, 0.24 m/s, with the rig's feed-forward the blocked piston
+    passes load_cell_limit_N: the check trips it."""
     peak, _ = seize_peak_N(0.24, HYDRAULICS.feedforward.gain, 0.0)
     assert peak > FORCE.load_cell_limit_N
     det, health = LoadCellLimit(FORCE), TickHealth()
