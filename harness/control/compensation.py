@@ -17,9 +17,11 @@ command ``u_c`` so that the load cell's ``u`` follows ``f_d``:
   adaptive time-series compensator of Chae, Kazemibidokhti & Ricles (2013), its coefficients
   fitted online over a moving window, within stated bounds.
 
-The compensator's command is the supervisor's input: the force clamp, the rate limit, the
-stroke fade, the stopping ramp and every interlock act on it exactly as on a controller's force
-(docs/SAFETY.md, "Force-tracking compensation"). The loop owns time: :meth:`Compensator.update`
+The compensator's command is the supervisor's input, beside the controller's force (the
+setpoint): the force clamp bounds the setpoint by ``safety.force.max_force_N`` and what the
+compensator added by ``safety.force.max_flow_term_N``; the rate limit, the stroke fade, the
+stopping ramp and every interlock act on the sum (docs/SAFETY.md, "What max_force_N must bound").
+The loop owns time: :meth:`Compensator.update`
 takes ``t`` and ``dt``, reads no clock, allocates nothing.
 
 A compensator reports its own health on every update: :attr:`Compensator.pinned` while a bounded

@@ -216,7 +216,7 @@ class ControlTick:
             raw = self.controller.update(t, dt, self.meas, friction, None)
             force = compensate(self.compensator, t, dt, raw, self.meas, self.command, self.health)
             trace.mark(CONTROL)
-            command = supervisor.update(t, dt, self.health, force)
+            command = supervisor.update(t, dt, self.health, force, raw)  # the setpoint is the controller's force
         except Exception as exc:  # noqa: BLE001 - any failure in the tick trips; it never kills the process
             command = supervisor.report_exception(t, exc)
         trace.mark(SUPERVISE)

@@ -214,3 +214,58 @@ class CompensationFault(Detector):
     def reset(self) -> None:
         """Clear the timer."""
         self._timer.reset()
+
+
+class LoadCellLimit(Detector):
+    """The load cell stays beyond its bound: a servo controller's limit detector, on the force fed back.
+
+    The supervisor bounds what the harness asks for (``max_force_N`` on the setpoint,
+    ``max_flow_term_N`` on what a harness-side compensator adds); this check bounds what the load
+    path carries, whatever asked for it: a blocked piston, a rig-side feed-forward acting on a
+    velocity that is no longer there, a servo controller that runs away. It fires once
+    ``|measured force|`` has been beyond ``load_cell_limit_N`` for ``load_cell_limit_time_s``
+    (docs/SAFETY.md, "What max_force_N must bound", derives both); a load cell that is not finite
+    counts as beyond (fail safe). A reset is refused while the load cell is still beyond.
+    """
+
+    NAME = "load_cell_limit"
+    ACTION = Action.TRIP
+    DETECTS = "|measured force| beyond load_cell_limit_N, or not finite, for load_cell_limit_time_s"
+    BOUND = "load_cell_limit_time_s after the load cell passes load_cell_limit_N"
+    RESET = "explicit reset, refused while |measured force| is beyond load_cell_limit_N; timer cleared"
+
+    __slots__ = ("limit_N", "_timer", "peak_N")
+
+    def __init__(self, config: ForceConfig) -> None:
+        super().__init__()
+        self.limit_N = config.load_cell_limit_N
+        self._timer = Persistence(config.load_cell_limit_time_s)
+        #: The largest |load-cell force| seen since the last reset (N): the figure docs/SAFETY.md reports.
+        self.peak_N = 0.0
+
+    def _beyond(self, force_N: float) -> bool:
+        return not abs(force_N) <= self.limit_N
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True once the load cell has been beyond the limit for ``load_cell_limit_time_s``."""
+        force = abs(health.measured_force_N)
+        if force > self.peak_N:
+            self.peak_N = force
+        return self._timer.update(t, self._beyond(health.measured_force_N))
+
+    def detail(self, health: TickHealth) -> str:
+        """The load cell, the limit, how long it has been beyond."""
+        return (
+            f"load cell {health.measured_force_N:.6g} N beyond +/-{self.limit_N:g} N (safety.force.load_cell_limit_N) "
+            f"for {self._timer.limit_s * 1e3:g} ms; expected within: the load path carries more than any healthy "
+            "command gives (a blocked piston, a servo controller's feed-forward or loop out of bounds)"
+        )
+
+    def present(self, health: TickHealth) -> str:
+        """Still beyond the limit: the reset is refused."""
+        return self.detail(health) if self._beyond(health.measured_force_N) else ""
+
+    def reset(self) -> None:
+        """Clear the timer and the peak."""
+        self._timer.reset()
+        self.peak_N = 0.0

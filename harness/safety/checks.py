@@ -32,6 +32,7 @@ from harness.safety.actuator_detectors import (
     DriveFault,
     ForceTracking,
     HydraulicPressure,
+    LoadCellLimit,
 )
 from harness.safety.comms_detectors import (
     BusErrorFrames,
@@ -52,6 +53,7 @@ from harness.safety.sensor_detectors import (
     SensorDisagree,
     SensorInvalid,
     SensorJump,
+    SensorPolarity,
     SensorSignFlip,
     SensorStale,
     SensorStuck,
@@ -113,6 +115,8 @@ CHECKS: tuple[Check, ...] = (
     Check(7, SensorJump, lambda config, table: SensorJump(config.sensors)),
     Check(8, SensorStuck, lambda config, table: SensorStuck(config.sensors)),
     Check(29, SensorSignFlip, lambda config, table: SensorSignFlip(config.sensors)),
+    # a flip held below the sign check's floor (a compensator's flow term damps the base mat on the wrong sensor)
+    Check(36, SensorPolarity, lambda config, table: SensorPolarity(config.sensors)),
     Check(9, SensorDisagree, lambda config, table: SensorDisagree(config.sensors)),
     # the CAN link
     Check(15, BusGone, lambda config, table: BusGone()),
@@ -126,6 +130,8 @@ CHECKS: tuple[Check, ...] = (
     Check(17, DriveFault, lambda config, table: DriveFault()),
     Check(18, HydraulicPressure, lambda config, table: HydraulicPressure()),
     Check(19, ActuatorStatusStale, lambda config, table: ActuatorStatusStale(config.actuator)),
+    # the load path's own limit, on the force fed back (a servo controller's limit detector)
+    Check(35, LoadCellLimit, lambda config, table: LoadCellLimit(config.force)),
     Check(20, ForceTracking, lambda config, table: ForceTracking(config.force)),
     Check(33, CompensationFault, lambda config, table: CompensationFault(config.force)),
     Check(34, ForceOscillation, lambda config, table: ForceOscillation(config.force)),

@@ -39,7 +39,21 @@ class StrokeConfig:
 class ForceConfig:
     """Limits on the commanded actuator force and on its tracking."""
 
-    max_force_N: float = quantity(10_000.0, unit="N", gt=0, doc="largest |force| ever commanded")
+    max_force_N: float = quantity(
+        10_000.0, unit="N", gt=0, doc="largest |force| the harness asks for (the setpoint, before harness-side compensation)",
+    )
+    # The flow term a harness-side compensator adds on top of the setpoint has its own bound, and the
+    # load cell is watched against its own (docs/SAFETY.md, "What max_force_N must bound").
+    max_flow_term_N: float = quantity(
+        5_000.0, unit="N", gt=0, le=1.0e6,
+        doc="largest |command - setpoint| a harness-side compensator may add (its flow term and correction)",
+    )
+    load_cell_limit_N: float = quantity(
+        12_500.0, unit="N", gt=0, le=1.0e7, doc="|load-cell force| beyond which, held load_cell_limit_time_s, the run trips",
+    )
+    load_cell_limit_time_s: float = quantity(
+        0.01, unit="s", gt=0, le=1.0, doc="how long the load cell may stay beyond load_cell_limit_N",
+    )
     max_force_rate_N_per_s: float = quantity(400_000.0, unit="N/s", gt=0, doc="largest |d force / dt| commanded")
     tracking_tolerance_N: float = quantity(1_500.0, unit="N", gt=0, doc="|measured - expected force| allowed")
     tracking_time_s: float = quantity(0.1, unit="s", gt=0, doc="how long the tracking error may persist")
@@ -103,6 +117,15 @@ class SensorConfig:
     sign_flip_time_s: float = quantity(
         0.02, unit="s", gt=0, le=1.0, doc="how long opposite signs (both above the floor) may persist",
     )
+    # A polarity fault the sign check cannot see: a damper on the wrong sensor holds the base mat
+    # below sign_flip_floor_m_s (docs/SAFETY.md, "A sign flip held below the floor: sensor_polarity").
+    polarity_floor_m_s: float = quantity(
+        0.00025, unit="m/s", gt=0, le=1.0,
+        doc="sqrt of -mean(filtered dx/dt * filtered v) beyond which a pair's polarity is wrong",
+    )
+    polarity_window_s: float = quantity(
+        0.5, unit="s", gt=0, le=10.0, doc="time constant of the running mean of filtered dx/dt * filtered v",
+    )
 
 
 @dataclass(frozen=True)
@@ -154,6 +177,7 @@ TRIP_CLASS_OF: dict[str, str] = {
     "bus_send_failures": "comms", "bus_gone": "comms", "foreign_command": "comms",
     "drive_fault": "actuator", "hydraulic_pressure": "actuator", "actuator_status_stale": "actuator",
     "force_tracking": "actuator", "compensation_fault": "actuator", "force_oscillation": "actuator",
+    "load_cell_limit": "actuator", "sensor_polarity": "sensor",
     "loop_stall": "loop", "loop_timing": "loop",
     "estop": "operator", "estop_lost": "operator", "operator_stop": "operator", "operator_trip": "operator",
     "tick_exception": "internal", "controller_output": "internal",
@@ -182,8 +206,8 @@ class TripActionsConfig:
     sensor: tuple[TripActionName, ...] = _actions("on the sensor_* checks")
     comms: tuple[TripActionName, ...] = _actions("on the e2e_rejects, bus_* and foreign_command checks")
     actuator: tuple[TripActionName, ...] = _actions(
-        "on drive_fault, hydraulic_pressure, actuator_status_stale, force_tracking, compensation_fault "
-        "(force_oscillation when its action trips)"
+        "on drive_fault, hydraulic_pressure, actuator_status_stale, force_tracking, compensation_fault, "
+        "load_cell_limit (force_oscillation when its action trips)"
     )
     loop: tuple[TripActionName, ...] = _actions("on loop_stall, loop_timing")
     operator: tuple[TripActionName, ...] = _actions("on estop, estop_lost, operator_trip (operator_stop when its action trips)")
@@ -313,6 +337,18 @@ def _force_problems(force: ForceConfig, run: RunConfig) -> list[str]:
         problems.append(
             f"force.tracking_tolerance_N ({force.tracking_tolerance_N:g} N) is at least twice force.max_force_N "
             f"({force.max_force_N:g} N): the tracking detector could never act"
+        )
+    healthy_N = force.max_force_N + force.tracking_tolerance_N
+    if force.load_cell_limit_N <= healthy_N:
+        problems.append(
+            f"force.load_cell_limit_N ({force.load_cell_limit_N:g} N) is not above force.max_force_N + "
+            f"force.tracking_tolerance_N ({healthy_N:g} N): a healthy run at its setpoint limit would trip load_cell_limit"
+        )
+    if force.supply_force_N is not None and force.max_force_N + force.max_flow_term_N > force.supply_force_N * (1 + 1e-9):
+        problems.append(
+            f"force.max_force_N + force.max_flow_term_N ({force.max_force_N + force.max_flow_term_N:g} N) exceeds "
+            f"force.supply_force_N ({force.supply_force_N:g} N): the command would ask a blocked piston for more than "
+            "the cylinder gives, a flow the valve cannot pass (docs/SAFETY.md, What max_force_N must bound)"
         )
     ramp_needed = force.max_force_N / force.max_force_rate_N_per_s
     if run.stopping_ramp_s < ramp_needed:

@@ -121,34 +121,59 @@ class StrokePredictiveLimit:
 
 
 class ForceClamp:
-    """Clamp the force magnitude to ``max_force_N``."""
+    """Clamp the setpoint to ``max_force_N`` and a compensator's addition to ``max_flow_term_N``.
+
+    The setpoint is the force the harness asks for (the controller's); a harness-side compensator
+    adds a flow term and a correction to it, the command. The two are bounded apart, as a lab's
+    controller bounds its setpoint and its own feed-forward: the command sent is
+    ``clamp(setpoint, max_force_N) + clamp(command - setpoint, max_flow_term_N)``
+    (docs/SAFETY.md, "What max_force_N must bound"). Without a compensator the command is the
+    setpoint and only ``max_force_N`` acts.
+    """
 
     NAME = "force_clamp"
     ACTION = Action.CLAMP
-    DETECTS = "|force| above max_force_N"
+    DETECTS = "|setpoint| above max_force_N, or |command - setpoint| (a compensator's addition) above max_flow_term_N"
     BOUND = "same tick"
     RESET = "none (acts only while the demand exceeds the limit)"
 
-    __slots__ = ("max_N", "acted")
+    __slots__ = ("max_N", "max_flow_N", "acted")
 
     def __init__(self, config: ForceConfig) -> None:
         self.max_N = config.max_force_N
+        self.max_flow_N = config.max_flow_term_N
         self.acted = False
+
+    @staticmethod
+    def _clip(value: float, bound: float) -> float:
+        return bound if value > bound else -bound if value < -bound else value
 
     def apply(self, force_N: float) -> float:
         """Return the force clamped to ``[-max_force_N, max_force_N]`` (N); the input must be finite."""
-        if force_N > self.max_N:
-            self.acted = True
-            return self.max_N
-        if force_N < -self.max_N:
-            self.acted = True
-            return -self.max_N
-        self.acted = False
-        return force_N
+        clamped = self._clip(force_N, self.max_N)
+        self.acted = clamped != force_N
+        return clamped
 
-    def detail(self, demand_N: float) -> str:
-        """What it clamped: the demanded force against the limit (built only on an event, its rising edge)."""
-        return f"demanded {demand_N:.6g} N, clamped to +/-{self.max_N:g} N (safety.force.max_force_N)"
+    def apply_compensated(self, setpoint_N: float, command_N: float) -> float:
+        """The command (N) with its setpoint clamped to ``max_force_N`` and its addition to ``max_flow_term_N``.
+
+        Both inputs must be finite.
+        """
+        setpoint = self._clip(setpoint_N, self.max_N)
+        addition_N = command_N - setpoint_N
+        addition = self._clip(addition_N, self.max_flow_N)
+        self.acted = setpoint != setpoint_N or addition != addition_N
+        return setpoint + addition
+
+    def detail(self, demand_N: float, setpoint_N: float | None = None) -> str:
+        """What it clamped: the demand (and its setpoint) against the limits (built only on an event, its rising edge)."""
+        if setpoint_N is None:
+            return f"demanded {demand_N:.6g} N, clamped to +/-{self.max_N:g} N (safety.force.max_force_N)"
+        return (
+            f"setpoint {setpoint_N:.6g} N within +/-{self.max_N:g} N (safety.force.max_force_N), compensator's "
+            f"addition {demand_N - setpoint_N:.6g} N within +/-{self.max_flow_N:g} N (safety.force.max_flow_term_N): "
+            f"command {demand_N:.6g} N clamped to {self.apply_compensated(setpoint_N, demand_N):.6g} N"
+        )
 
 
 class ForceRateLimit:

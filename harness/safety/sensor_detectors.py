@@ -382,3 +382,68 @@ class SensorSignFlip(_PairRates):
             f"{self._held_s * 1e3:.1f} ms (limit {self.time_s * 1e3:.1f} ms); "
             "expected the same sign (polarity or wiring fault: the controller would push the wrong way)"
         )
+
+
+class SensorPolarity(_PairRates):
+    """A displacement/velocity pair whose product has a negative mean: a polarity fault held below the sign floor.
+
+    ``sensor_sign_flip`` needs both filtered signals above ``sign_flip_floor_m_s`` (2 mm/s). With a
+    harness-side compensation a negated ``ydot_b`` is fed back through the flow term as a damper on
+    the base mat's own velocity, which holds the base mat below that floor: the flip stays latent
+    (docs/SAFETY.md, "A sign flip held below the floor: sensor_polarity"). This check needs no floor
+    per sample: it keeps the running mean (time constant ``polarity_window_s``) of the product of
+    the filtered derivative and the filtered velocity of each pair, ``-E[v^2]`` for a flipped pair
+    and ``+E[v^2]`` for a sound one, and fires while the mean is below ``-polarity_floor_m_s^2``
+    for ``sign_flip_time_s``. The noise of the two sensors is independent, so at rest the mean
+    is zero within a small fraction of the floor. A product that is not finite counts as wrong (fail safe).
+    """
+
+    NAME = "sensor_polarity"
+    ACTION = Action.TRIP
+    DETECTS = (
+        "running mean over polarity_window_s of filtered d(displacement)/dt times filtered velocity "
+        "below -polarity_floor_m_s^2"
+    )
+    BOUND = "sign_flip_time_s after the running mean falls below -polarity_floor_m_s^2"
+    RESET = "explicit reset; filters and running means cleared"
+
+    __slots__ = ("floor_m_s", "threshold_m2_s2", "_mean", "_dt")
+
+    def __init__(self, config: SensorConfig) -> None:
+        super().__init__(config.disagree_filter_s, config.sign_flip_time_s)
+        self.floor_m_s = config.polarity_floor_m_s
+        self.threshold_m2_s2 = -config.polarity_floor_m_s * config.polarity_floor_m_s
+        self._mean = (LowPass(config.polarity_window_s), LowPass(config.polarity_window_s))
+        for mean in self._mean:
+            mean.reset(0.0, True)
+        self._dt = 0.0
+
+    def _bad(self, pair: int) -> bool:
+        product = self._deriv[pair].y * self._vel[pair].y
+        mean = self._mean[pair].update(product, self._dt)
+        return not mean >= self.threshold_m2_s2
+
+    def update(self, t: float, dt: float, health: TickHealth) -> bool:
+        """True once either pair's running mean product has been below the threshold for ``sign_flip_time_s``."""
+        self._dt = dt
+        return self._either_pair(t, dt, health)
+
+    def mean_m2_s2(self, pair: int) -> float:
+        """The running mean of the product of ``pair`` (0 table, 1 base mat) (m^2/s^2)."""
+        return self._mean[pair].y
+
+    def detail(self, health: TickHealth) -> str:
+        """Which pair, its running mean product, the threshold."""
+        p = self._pair
+        x, v = CHANNELS[2 * p], CHANNELS[2 * p + 1]
+        return (
+            f"polarity of {x}/{v}: running mean of d{x}/dt * {v} (filtered) = {self._mean[p].y:.6g} m^2/s^2, "
+            f"expected at least {self.threshold_m2_s2:.6g} m^2/s^2 (-({self.floor_m_s:g} m/s)^2): "
+            "the velocity moves against the displacement (a polarity or wiring fault the sign check's floor hides)"
+        )
+
+    def reset(self) -> None:
+        """Clear filters, timers and running means."""
+        super().reset()
+        for p in range(2):
+            self._mean[p].reset(0.0, True)

@@ -314,16 +314,19 @@ class Supervisor:
                 self.trip(t, detector.NAME, detector.detail(health))
                 return
 
-    def _shape(self, t: float, dt: float, raw_force_N: float, x_b_m: float) -> float:
+    def _shape(self, t: float, dt: float, raw_force_N: float, x_b_m: float, setpoint_N: float | None) -> float:
         """Clamp, stopping ramp, rate limit, stroke fade; flags what acted.
 
         Each interlock's event says its limit and the demanded value (the stopping ramp its
         length); the text is built on the rising edge only, as a detector's is.
         """
         state = self.lifecycle.state
-        force = self.clamp.apply(raw_force_N)
+        if setpoint_N is None:
+            force = self.clamp.apply(raw_force_N)
+        else:
+            force = self.clamp.apply_compensated(setpoint_N, raw_force_N)
         if self.clamp.acted and self._count(_I_CLAMP, _B_CLAMP):
-            self.events.push(t, EventKind.INTERLOCK, ForceClamp.NAME, self.clamp.detail(raw_force_N))
+            self.events.push(t, EventKind.INTERLOCK, ForceClamp.NAME, self.clamp.detail(raw_force_N, setpoint_N))
         if state is State.ARMED:
             force = 0.0
         elif state is State.STOPPING:
@@ -341,7 +344,9 @@ class Supervisor:
             self.events.push(t, EventKind.INTERLOCK, StrokeSoftFade.NAME, self.soft.detail(demand, x_b_m))
         return force
 
-    def update(self, t: float, dt: float, health: TickHealth, raw_force_N: float) -> SupervisedCommand:
+    def update(
+        self, t: float, dt: float, health: TickHealth, raw_force_N: float, setpoint_N: float | None = None,
+    ) -> SupervisedCommand:
         """Supervise one tick and return the command to write.
 
         Parameters
@@ -353,7 +358,12 @@ class Supervisor:
         health : TickHealth
             This tick's health inputs (updated in place by the loop).
         raw_force_N : float
-            The controller's force (N); NaN or inf trips ``controller_output``.
+            The command to shape (N): the controller's force, or a harness-side compensator's command
+            for it; NaN or inf trips ``controller_output``.
+        setpoint_N : float or None, optional
+            The controller's force (N) when ``raw_force_N`` is a compensator's command: ``max_force_N``
+            then bounds the setpoint and ``max_flow_term_N`` what the compensator added
+            (docs/SAFETY.md, "What max_force_N must bound"). None: ``raw_force_N`` is the setpoint.
 
         Returns
         -------
@@ -369,9 +379,9 @@ class Supervisor:
             detail = f"t = {t!r} s, dt = {dt!r} s, expected finite t and dt > 0"
             self.trip(t if math.isfinite(t) else 0.0, LoopTiming.NAME, detail)
             return self._finish_tick(self.command)
-        if self._run_detectors(t, dt, health) or not self._check_output_and_stroke(t, health, raw_force_N):
+        if self._run_detectors(t, dt, health) or not self._check_output_and_stroke(t, health, raw_force_N, setpoint_N):
             return self._finish_tick(self.command)
-        force = self._shape(t, dt, raw_force_N, health.meas.sliding_displacement_m)
+        force = self._shape(t, dt, raw_force_N, health.meas.sliding_displacement_m, setpoint_N)
         if self._ramp_done(t, force):
             self.lifecycle.finish(t)
             self._state_event(t, State.STOPPING, "stopping ramp complete")
@@ -386,10 +396,13 @@ class Supervisor:
         command.trip_reason = ""
         return self._finish_tick(command)
 
-    def _check_output_and_stroke(self, t: float, health: TickHealth, raw_force_N: float) -> bool:
-        """False (and tripped) if the raw force is not finite or the stroke trips."""
+    def _check_output_and_stroke(self, t: float, health: TickHealth, raw_force_N: float, setpoint_N: float | None) -> bool:
+        """False (and tripped) if the raw force or the setpoint is not finite or the stroke trips."""
         if not math.isfinite(raw_force_N):
             self.trip(t, ControllerOutput.NAME, f"controller output not finite: {raw_force_N!r} N")
+            return False
+        if setpoint_N is not None and not math.isfinite(setpoint_N):
+            self.trip(t, ControllerOutput.NAME, f"controller setpoint not finite: {setpoint_N!r} N")
             return False
         x_b, v_b = health.meas.sliding_displacement_m, health.meas.sliding_velocity_m_s
         if self.hard.check(x_b):

@@ -48,6 +48,9 @@ DIRECTIONS: dict[str, Direction] = {
     "stroke.arm_tolerance_m": "larger",
     "force.max_force_N": "larger",
     "force.max_force_rate_N_per_s": "larger",
+    "force.max_flow_term_N": "larger",
+    "force.load_cell_limit_N": "larger",
+    "force.load_cell_limit_time_s": "larger",
     "force.tracking_tolerance_N": "larger",
     "force.tracking_time_s": "larger",
     "force.actuator_time_constant_s": "smaller",  # a faster claimed actuator widens the stall budget
@@ -71,6 +74,8 @@ DIRECTIONS: dict[str, Direction] = {
     "sensors.disagree_filter_s": "larger",  # a slower filter hides and delays a disagreement
     "sensors.sign_flip_floor_m_s": "larger",
     "sensors.sign_flip_time_s": "larger",
+    "sensors.polarity_floor_m_s": "larger",
+    "sensors.polarity_window_s": "larger",  # a longer window acts later
     "comms.max_e2e_rejects": "larger",
     "comms.e2e_window_s": "smaller",  # "more than N within the window": a shorter window allows a higher rate
     "comms.max_error_frames": "larger",

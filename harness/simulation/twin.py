@@ -223,7 +223,7 @@ def _twin_sample(
         friction = estimator.update(t, period, meas.sliding_velocity_m_s)
         raw = controller.update(t, period, meas, friction, rig.table.y[:true_state] if true_state else None)
         force = compensate(compensator, t, period, raw, meas, supervisor.command, health)  # as the loop's tick does
-        command = supervisor.update(t, period, health, force)
+        command = supervisor.update(t, period, health, force, raw)
         raw_force[k], command_force[k] = raw, command.force_N
         sliding_variable[k], friction_estimate[k] = controller.sliding_variable, friction
         if supervisor.state is State.TRIPPED:

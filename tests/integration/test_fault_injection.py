@@ -135,3 +135,34 @@ def test_extra_delay_alone_does_not_trip(tmp_path, capsys):
     if metadata["outcome"] == "stopped":
         assert metadata["trip_reason"] == "force_oscillation"
     assert not [e for e in load_run(folder).events if e["kind"] == "fault" and e["name"] != "force_oscillation"]
+
+
+#: The slow sign flip under each way of closing the force loop: the harness's compensation
+#: (``control.compensation``) and the servo controller's own velocity feed-forward (the shipped rig has it;
+#: ``plain_loop`` takes it away, in the rig and in what the tracking check expects).
+SLOW_FLIP_METHODS = {
+    "none_rig_feedforward": (),
+    "plain_loop": ("--set", "rig.actuator.hydraulics.feedforward.gain=0",
+                   "--set", "safety.force.velocity_feedforward_gain=0", "--allow-weaker-safety"),
+    "model": ("--set", "control.compensation=model"),
+    "adaptive": ("--set", "control.compensation=adaptive"),
+}
+
+
+@pytest.mark.parametrize("method", sorted(SLOW_FLIP_METHODS))
+def test_a_slow_sign_flip_trips_under_every_compensation_and_with_rig_side_feedforward(tmp_path, capsys, method):
+    """The flip of ydot_b at 0.03 g ran untripped under ``model`` and ``adaptive``: the flow term on the wrong
+    sensor damps the base mat below sensor_sign_flip's 2 mm/s floor (docs/SAFETY.md, "A sign flip held below
+    the floor"). sensor_polarity sees it there; either check may be first, and the run trips before its end."""
+    status, folder = _run_with_fault(tmp_path, "{kind: sign_flip, target: BASE_SENSORS, param: 1}",
+                                     extra=("--pga", "0.03", *SLOW_FLIP_METHODS[method]))
+    capsys.readouterr()
+    metadata = json.loads((folder / "metadata.json").read_text())
+    assert status == exit_codes.TRIPPED, metadata
+    assert metadata["trip_reason"] in {"sensor_sign_flip", "sensor_polarity"}
+    run = load_run(folder)
+    trip = next(e for e in run.events if e["kind"] == "fault")
+    assert "y_b/ydot_b" in trip["detail"]
+    assert float(trip["t_s"]) > _onset_time(run)  # never before the flip
+    # before the fault, neither check acted: the polarity check is quiet on the healthy base mat
+    assert not [e for e in run.events if e["kind"] == "fault" and float(e["t_s"]) < _onset_time(run)]

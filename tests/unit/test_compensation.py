@@ -253,19 +253,23 @@ def test_the_tick_hands_the_compensators_flags_to_the_supervisor(bench) -> None:
     assert b.t - pinned_from == pytest.approx(0.1 + PERIOD_S, abs=1e-9)  # tracking_time_s after the first pinned tick
 
 
-def test_the_supervisor_clamps_the_compensated_command_not_the_controllers_force(bench) -> None:
+def test_the_supervisor_clamps_the_setpoint_and_lets_the_flow_term_through_within_its_bound(bench) -> None:
+    """The controller's 9 kN is inside max_force_N; the flow term (2.8 kN at 0.03 m/s) is inside max_flow_term_N,
+    so the command goes out whole, above max_force_N (the clamp on the command cut it to 10 kN: issue 31)."""
     b = bench()
     profile = load_profile(None, overrides=[*PLAIN_LOOP, "control.compensation=model"])
     b.tick.compensator = make_compensator(profile)
-    b.controller.force_N = 9_000.0  # below the 10 kN limit, but not with the flow term added
+    b.controller.force_N = 9_000.0
     b.run_until_running()
-    b.v_b = 0.05  # the flow term: 4.7 kN
+    b.v_b = 0.03
     for _ in range(60):
         b.x_b += b.v_b * PERIOD_S
         command, sent = b.step()
-    assert b.tick.compensator.command_N > 13_000.0
-    assert command.state is State.RUNNING
-    assert command.force_N == profile.safety.force.max_force_N and sent == (True, pytest.approx(10_000.0, abs=1.0))
+    force = profile.safety.force
+    assert force.max_force_N < b.tick.compensator.command_N < force.max_force_N + force.max_flow_term_N
+    assert command.state is State.RUNNING, b.tick.supervisor.trip_detail
+    assert command.force_N == pytest.approx(b.tick.compensator.command_N, abs=force.max_force_rate_N_per_s * PERIOD_S)
+    assert command.force_N > force.max_force_N and sent[0]
 
 
 def test_a_compensator_on_the_wrong_actuator_model_trips_compensation_fault_and_force_tracking_stays_quiet() -> None:

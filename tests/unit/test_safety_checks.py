@@ -34,7 +34,8 @@ RECORDED_BITS = (
     "bus_error_passive", "bus_off", "bus_send_failures", "bus_gone", "foreign_command", "drive_fault",
     "hydraulic_pressure", "actuator_status_stale", "force_tracking", "loop_stall", "loop_timing", "tick_exception",
     "controller_output", "estop", "operator_stop", "operator_trip", "stop_ramp", "sensor_sign_flip", "estop_lost",
-    "table_record_mismatch", "table_record_marginal", "compensation_fault",
+    "table_record_mismatch", "table_record_marginal", "compensation_fault", "force_oscillation", "load_cell_limit",
+    "sensor_polarity",
 )
 
 

@@ -116,17 +116,21 @@ def test_a_variant_or_an_extending_file_is_the_profiles_own_choice(tmp_path):
     assert item.profile_value == 0.007
 
 
+#: A load-cell limit and a supply force above a raised max_force_N, so that the check under test speaks first.
+ROOMY_FORCE = ("safety.force.load_cell_limit_N=60000", "safety.force.supply_force_N=60000")
+
+
 def test_max_force_beyond_the_dbc_is_refused_at_load():
     assert command_force_limit_N("") == 30_000.0
     with pytest.raises(ProfileError, match=r"safety.force.max_force_N: found 40000 N, expected at most 30000 N.*ACTUATOR_CMD"):
-        load_profile(RIG, overrides=["safety.force.max_force_N=40000"])
+        load_profile(RIG, overrides=["safety.force.max_force_N=40000", *ROOMY_FORCE])
 
 
 def test_the_protocol_limit_is_read_from_the_dbc(tmp_path):
     dbc = tmp_path / "narrow.dbc"
     text = (REPO / "drivers" / "rig.dbc").read_text()
     dbc.write_text(text.replace('SG_ force : 16|16@1- (1,0) [-30000|30000] "N"', 'SG_ force : 16|16@1- (1,0) [-20000|20000] "N"'))
-    overrides = [f"can.dbc_path={dbc}", "rig.actuator.force_limit_N=30000", "safety.force.max_force_N=25000"]
+    overrides = [f"can.dbc_path={dbc}", "rig.actuator.force_limit_N=30000", "safety.force.max_force_N=25000", *ROOMY_FORCE]
     expected = r"expected at most 20000 N \(the range of the ACTUATOR_CMD force signal of .*narrow.dbc"
     with pytest.raises(ProfileError, match=expected):
         load_profile(RIG, overrides=overrides)
@@ -134,7 +138,7 @@ def test_the_protocol_limit_is_read_from_the_dbc(tmp_path):
 
 def test_max_force_beyond_an_actuator_rating_is_refused():
     with pytest.raises(ProfileError, match=r"found 15000 N, expected at most 12000 N \(rig.actuator.force_limit_N"):
-        load_profile(RIG, overrides=["safety.force.max_force_N=15000"])
+        load_profile(RIG, overrides=["safety.force.max_force_N=15000", *ROOMY_FORCE])
     with pytest.raises(ProfileError, match=r"found 10000 N, expected at most 8000 N \(safety.force.actuator_rating_N"):
         load_profile(RIG, overrides=["safety.force.actuator_rating_N=8000"])
     assert load_profile(RIG, overrides=["safety.force.actuator_rating_N=11000"]).safety_weakened == ()

@@ -49,10 +49,10 @@ def test_detectors_run_in_the_order_of_the_list_of_checks() -> None:
     order = [d.NAME for d in sup.detectors]
     assert order == [
         "estop", "estop_lost", "operator_trip", "operator_stop", "loop_stall",
-        "sensor_invalid", "sensor_stale", "sensor_jump", "sensor_stuck", "sensor_sign_flip", "sensor_disagree",
-        "bus_gone", "bus_off", "bus_error_passive", "bus_error_frames", "e2e_rejects", "bus_send_failures",
-        "foreign_command", "drive_fault", "hydraulic_pressure", "actuator_status_stale", "force_tracking", "compensation_fault",
-        "force_oscillation", "table_record_mismatch", "table_record_marginal",
+        "sensor_invalid", "sensor_stale", "sensor_jump", "sensor_stuck", "sensor_sign_flip", "sensor_polarity",
+        "sensor_disagree", "bus_gone", "bus_off", "bus_error_passive", "bus_error_frames", "e2e_rejects", "bus_send_failures",
+        "foreign_command", "drive_fault", "hydraulic_pressure", "actuator_status_stale", "load_cell_limit", "force_tracking",
+        "compensation_fault", "force_oscillation", "table_record_mismatch", "table_record_marginal",
     ]
     assert order == [check.name for check in CHECKS if check.build is not None]
 
