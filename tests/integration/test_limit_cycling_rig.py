@@ -1,11 +1,13 @@
 """A rig whose force loop limit-cycles is stopped safely by ``force_oscillation`` (issue 30, item 2).
 
-The rig: the shipped servo-hydraulic actuator whose servo controller samples its command input
-4 ms late (``rig.actuator.delay_s`` 0.004, against the shipped 1 ms). The extra phase lag at the
-coupled peak of the actuator's free response makes the force loop through the controller unstable:
-force command and load cell settle into an oscillation near 46 Hz (measured: running RMS above
-30 Hz about 790 N commanded and 560 N measured, against the 475 N limit). Before this check the run
-completed. The shipped rig in the same lockstep run, 6 s of the synthetic record, stays quiet.
+The rig: the shipped servo-hydraulic actuator whose servo controller is tuned three times too hot
+(``rig.truth.actuator.force_loop_bandwidth_hz`` 60, against the 20 Hz the design believes and the
+15-30 Hz a lab tunes on a blocked piston; SPEC 7a): with the 75 Hz valve's phase lag the force loop
+has no margin left, and force command and load cell settle into a sustained oscillation that
+saturates the valve. Before this check the run completed. (An earlier version of this test delayed
+the servo controller's command input by 4 ms instead; the servo controller's velocity feed-forward
+keeps that rig stable, so it no longer limit-cycles.) The shipped rig in the same lockstep run, 6 s
+of the synthetic record, stays quiet.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from harness.recording import load_run
 from harness.safety.checks import bit
 from harness.safety.lifecycle import State
 
-LIMIT_CYCLING = ["--set", "rig.actuator.delay_s=0.004"]
+LIMIT_CYCLING = ["--set", "rig.truth.actuator.force_loop_bandwidth_hz=60"]
 
 
 def _dry_run(tmp_path: Path, *args: str) -> tuple[int, Path]:
