@@ -4,8 +4,9 @@ On the rig's twin with one period of asynchrony (as a real-time run has it), the
 estimator's pre-sliding stiffness, cancelled through the loop's delay, sustained a 48 Hz
 limit cycle on a servo controller without feed-forward when the estimator used the bearing's
 yield displacement (harness/control/estimator_margin.py derives the loop and the estimator's own
-yield displacement that keeps it a 6 dB gain margin; benchmarks/limit_cycle.py). The check: in the quiet tail (22-30 s) the load cell's RMS above 30 Hz is at most 5 % of
-its RMS over the record, for the three records and at 0.01 g.
+yield displacement that keeps it a 6 dB gain margin; benchmarks/limit_cycle.py). The check:
+in the quiet tail (22-30 s) the load cell's RMS above 30 Hz is at most 5 % of its RMS over the record,
+for the three records and at 0.01 g.
 """
 
 from __future__ import annotations
