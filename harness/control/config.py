@@ -22,7 +22,7 @@ class EstimatorSettings:
     """The friction estimator's own design values (``control.estimator``; SPEC 3, Eq. 3-5)."""
 
     yield_displacement_m: float | None = quantity(
-        None, unit="m", gt=0, le=0.01,
+        None, unit="m", gt=0,
         doc="the estimator's pre-sliding (Bouc-Wen yield) displacement; none: the bearing's D_y "
             "(docs/SAFETY.md, 'The friction estimator's loop')",
     )

@@ -19,6 +19,7 @@ from harness.control.estimator_margin import (
     phase_crossings,
 )
 from harness.control.factory import make_friction_estimator
+from harness.errors import ProfileError
 from harness.profile import load_profile
 from tests.conftest import PROFILES
 
@@ -66,3 +67,8 @@ def test_the_factory_builds_the_estimator_with_the_setting_and_the_bearings_d_y_
             estimator.update(step * 1e-3, 1e-3, 1e-3)
     assert 0.0 < shipped.nu < source.nu < 1.0
     assert source.force_N <= profile.bearing.mu_max * weight
+
+
+def test_a_yield_displacement_that_is_not_positive_is_refused() -> None:
+    with pytest.raises(ProfileError, match=r"control\.estimator\.yield_displacement_m"):
+        load_profile(PROFILES / "nceer_4dof.yaml", overrides=["control.estimator.yield_displacement_m=0"])
