@@ -29,8 +29,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from harness.control.estimator import FrictionEstimator  # noqa: E402
-from harness.control.factory import make_controller  # noqa: E402
+from harness.control.factory import make_controller, make_friction_estimator  # noqa: E402
 from harness.model.plant import Plant, TableMotion  # noqa: E402
 from harness.model.reference import ReferencePlant  # noqa: E402
 from harness.motions import load_motion  # noqa: E402
@@ -49,7 +48,7 @@ DURATION_S = 30.0
 def run(plant_class, profile, table, controller_name, rate_hz):
     plant = plant_class(profile.structure, profile.bearing, table, rtol=profile.simulation.rtol)
     controller = make_controller(profile, controller_name)
-    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    estimator = make_friction_estimator(profile)
     settings = SamplingSettings(rate_hz, 0.0, "estimator")
     started = time.perf_counter()
     result = run_case("controlled", plant, DURATION_S, settings, controller, estimator)

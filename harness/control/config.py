@@ -18,6 +18,17 @@ from harness.control.designs import ControllerDesign
 
 
 @dataclass(frozen=True)
+class EstimatorSettings:
+    """The friction estimator's own design values (``control.estimator``; SPEC 3, Eq. 3-5)."""
+
+    yield_displacement_m: float | None = quantity(
+        None, unit="m", gt=0,
+        doc="the estimator's pre-sliding (Bouc-Wen yield) displacement; none: the bearing's D_y "
+            "(docs/SAFETY.md, 'The friction estimator's loop')",
+    )
+
+
+@dataclass(frozen=True)
 class ControlConfig:
     """Controller sampling and the named controller designs of a profile."""
 
@@ -37,6 +48,7 @@ class ControlConfig:
                "(harness/control/compensation.py)",
     })
     compensator: CompensatorSettings = field(default_factory=CompensatorSettings)
+    estimator: EstimatorSettings = field(default_factory=EstimatorSettings)
 
     def __post_init__(self) -> None:
         if not self.designs:

@@ -1,19 +1,34 @@
 """Controllers built from a profile's named designs: for simulation, and for a rig.
 
-One place builds a controller, so ``harness simulate``, the simulated twin, a dry run
+One place builds a controller and its friction estimator, so ``harness simulate``, the simulated twin, a dry run
 and a run on the real rig all get the same design from the same profile.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 from harness.control.actuator_aware import ActuatorModel
 from harness.control.adaptive_compensation import AdaptiveCompensator
 from harness.control.compensation import Compensator, NoCompensation
 from harness.control.controllers import Controller
 from harness.control.designs import OutputActuatorDesign, StateFeedbackActuatorDesign, build_controller
+from harness.control.estimator import FrictionEstimator
+from harness.control.estimator_margin import estimator_yield_displacement_m
 from harness.control.model_compensation import ModelCompensator
 from harness.errors import ModelError, ProfileError
 from harness.profile import Profile
+
+
+def make_friction_estimator(profile: Profile) -> FrictionEstimator:
+    """The friction estimator of ``profile``'s controller (SPEC 3, Eq. 3-5).
+
+    The design bearing (``bearing``, never ``rig.truth``) with the estimator's own yield
+    displacement (``control.estimator.yield_displacement_m``, the bearing's ``D_y`` if none;
+    harness/control/estimator_margin.py derives the shipped value), carrying ``mbar g``.
+    """
+    bearing = dataclasses.replace(profile.bearing, yield_displacement_m=estimator_yield_displacement_m(profile))
+    return FrictionEstimator(bearing, profile.structure.total_weight_N)
 
 
 def require_design(profile: Profile, name: str) -> None:

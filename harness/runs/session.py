@@ -22,8 +22,7 @@ from harness.canbus.link import open_harness
 from harness.console.live import LiveConsole, run_title
 from harness.control.compensation import NoCompensation
 from harness.control.controllers import Controller
-from harness.control.estimator import FrictionEstimator
-from harness.control.factory import build_controller_for_rig, make_compensator
+from harness.control.factory import build_controller_for_rig, make_compensator, make_friction_estimator
 from harness.errors import ProfileError, StoppedByOperator
 from harness.loop.operator import stop_if_requested
 from harness.loop.preflight import HostTiming, HostTimingRefused, measure_host_timing
@@ -310,7 +309,7 @@ def run_session(
     compensator = make_compensator(profile, controller=profile.control.controller) if controller is None else NoCompensation()
     if controller is None:
         controller = build_controller_for_rig(profile, profile.control.controller)
-    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    estimator = make_friction_estimator(profile)
     supervisor = Supervisor(profile.safety, period_s=1.0 / profile.control.rate_hz)
     record = settings.table_record
     if record is not None:

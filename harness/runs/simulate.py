@@ -12,8 +12,13 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness.control.estimator import FrictionEstimator
-from harness.control.factory import build_controller_for_rig, designed_with_actuator, make_compensator, make_controller
+from harness.control.factory import (
+    build_controller_for_rig,
+    designed_with_actuator,
+    make_compensator,
+    make_controller,
+    make_friction_estimator,
+)
 from harness.errors import ProfileError
 from harness.model.plant import Plant, TableMotion
 from harness.motions import GroundMotion
@@ -151,7 +156,7 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
             offline_true_state=offline, compensator=make_compensator(profile, controller=name),
         )
     elif controller is not None:
-        estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+        estimator = make_friction_estimator(profile)
         result.cases["controlled"] = run_case(
             "controlled", plant, duration, settings, controller, estimator, progress=reporter("controlled")
         )

@@ -25,7 +25,7 @@ import numpy as np
 from harness.control.compensation import Compensator, compensate
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
-from harness.control.factory import make_compensator
+from harness.control.factory import make_compensator, make_friction_estimator
 from harness.errors import ModelError
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
@@ -110,7 +110,7 @@ def run_rig_twin(
     started = time.perf_counter()
     period = 1.0 / rate_hz
     rig = _TwinRig(profile, motion, period, seed, asynchronous_delay_s, lockstep)
-    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    estimator = make_friction_estimator(profile)
     supervisor = Supervisor(profile.safety, period_s=period)
     health = TickHealth()
     if compensator is None:

@@ -20,8 +20,7 @@ from drivers.measurements import Measurements
 from drivers.protocol_values import DriveState, RigCommand
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness, open_rig
-from harness.control.estimator import FrictionEstimator
-from harness.control.factory import make_controller
+from harness.control.factory import make_controller, make_friction_estimator
 from harness.profile import load_profile
 from harness.rig.config import ActuatorConfig, DriveConfig, RigConfig, SensorsConfig
 from harness.rig.virtual_rig import RigParts, VirtualRig
@@ -63,7 +62,7 @@ def _closed_loop(profile, motion, rate_hz: float) -> dict:
     n_steps = int(round(motion.duration_s * rate_hz))
     can_config = CanConfig(channel=f"equiv-{uuid.uuid4().hex[:8]}")
     controller = make_controller(profile, "phi")
-    estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+    estimator = make_friction_estimator(profile)
     meas = Measurements()
     with open_rig(can_config) as rig_link, open_harness(can_config) as link:
         rig = VirtualRig(_ideal_parts(profile), motion, rig_link, step_period_s=period)

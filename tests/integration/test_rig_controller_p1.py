@@ -44,9 +44,13 @@ def test_stroke_follows_the_table_with_p1_8_and_doubles_with_0_315():
     [("el_centro", 0.34, 27.1, 10.0), ("hachinohe", 0.23, 31.2, 10.6), ("pacoima", 0.40, 37.3, 12.1)],
 )
 def test_rig_records_reproduce_the_measured_peaks(records_dir, record, pga_g, stroke_mm, force_pct):
-    """Issue 12's figures for the rig's three records at time scale 2, 30 s, ideal control."""
+    """Issue 12's figures for the rig's three records at time scale 2, 30 s, ideal control.
+
+    Measured with the friction estimator on the bearing's yield displacement (the source's design);
+    the shipped estimator's wider one (issue 31) slides the base mat 8-9 % more on Hachinohe and Pacoima.
+    """
     options = StudyOptions(record=record, records_dir=str(records_dir), pga_g=pga_g, time_scale=2.0, duration_s=30.0)
-    stroke, _, force = _stroke_and_pgd(options)
+    stroke, _, force = _stroke_and_pgd(options, ("control.estimator.yield_displacement_m=null",))
     assert stroke * 1e3 == pytest.approx(stroke_mm, rel=0.03)
     assert force == pytest.approx(force_pct, rel=0.03)
     assert force <= 14.0  # the source: the peak control force was 12-14 % of the weight

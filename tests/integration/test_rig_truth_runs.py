@@ -14,14 +14,13 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from harness.control import designs
+from harness.control import designs, factory
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.motions import load_motion
 from harness.profile import load_profile
 from harness.runs.options import StudyOptions
 from harness.runs.simulate import run_study
-from harness.simulation import twin as twin_module
 from harness.simulation.twin import run_rig_twin
 from tests.conftest import PROFILES
 
@@ -35,20 +34,23 @@ class _Recorded(FrictionEstimator):
     """The estimator, remembering the parameters it was built with."""
 
     built: list[tuple[float, float]] = []
+    yields_m: list[float] = []
 
     def __init__(self, bearing, total_weight_N: float):
         super().__init__(bearing, total_weight_N)
         _Recorded.built.append((bearing.mu_max, total_weight_N))
+        _Recorded.yields_m.append(bearing.yield_displacement_m)
 
 
 @pytest.fixture
 def recorded(monkeypatch):
-    _Recorded.built = []
+    _Recorded.built, _Recorded.yields_m = [], []
+    # every run builds its estimator in the one factory (simulate, the twin and a session alike)
+    monkeypatch.setattr(factory, "FrictionEstimator", _Recorded)
     return _Recorded
 
 
 def _twin(monkeypatch, recorded, overrides: tuple[str, ...]):
-    monkeypatch.setattr(twin_module, "FrictionEstimator", recorded)
     # The force-source rig: the servo-hydraulic actuator's velocity feedback would dominate the force.
     profile = load_profile(PROFILES / "nceer_4dof.yaml", variant="force_source", overrides=overrides)
     motion = load_motion(profile.record, base_dir=profile.base_dir, name="synthetic", duration_s=3.0)
@@ -61,6 +63,7 @@ def test_the_twin_integrates_the_truth_while_its_controller_and_estimator_keep_t
     true_controller, true = _twin(monkeypatch, recorded, TRUTH)
     weight = load_profile(PROFILES / "nceer_4dof.yaml").structure.total_weight_N
     assert recorded.built == [(0.06, weight), (0.06, weight)]  # the estimator: the design's bearing, both times
+    assert recorded.yields_m == pytest.approx([6.5e-5, 6.5e-5])  # with its own yield displacement (control.estimator)
     assert true_controller.restoring_stiffness_N_per_m == design_controller.restoring_stiffness_N_per_m == 71616.36
     # the plant is not the design's: a stiffer grip and softer springs change what the controller has to do
     design_force, true_force = design.peaks.peak_force_pct_weight, true.peaks.peak_force_pct_weight
@@ -98,7 +101,6 @@ def test_simulate_applies_the_truth_with_rig_effects_only(monkeypatch):
 def test_a_dry_run_serves_the_truth_and_says_so(tmp_path, monkeypatch, recorded):
     from harness.rig import virtual_rig
     from harness.runs import dry_run as dry_run_module
-    from harness.runs import session
 
     rigs: list = []
     original_init = virtual_rig.VirtualRig.__init__
@@ -115,7 +117,6 @@ def test_a_dry_run_serves_the_truth_and_says_so(tmp_path, monkeypatch, recorded)
         return original_plant(building, bearing, *args, **kwargs)
 
     monkeypatch.setattr(virtual_rig.VirtualRig, "__init__", remember)
-    monkeypatch.setattr(session, "FrictionEstimator", recorded)
     monkeypatch.setattr(dry_run_module, "Plant", plant)
     profile = load_profile(PROFILES / "nceer_4dof.yaml", overrides=["rig.truth.bearing.mu_max=0.075"])
     options = dry_run_module.DryRunOptions(
@@ -127,7 +128,9 @@ def test_a_dry_run_serves_the_truth_and_says_so(tmp_path, monkeypatch, recorded)
     assert result.session.outcome == "completed"
     (rig,) = rigs
     assert rig.table.record.bearing.mu_max == 0.075  # the rig's plant: the truth
-    assert [mu for mu, _ in recorded.built] == [0.06]  # the loop's estimator: the design
+    # the loop's estimator and its simulated twin's (harness.runs.dry_run.simulated_twins): the design's bearing ...
+    assert [mu for mu, _ in recorded.built] == [0.06, 0.06]
+    assert recorded.yields_m == pytest.approx([6.5e-5, 6.5e-5])  # ... with the estimator's own yield displacement
     assert [b.mu_max for b in passive_plants] == [0.075]  # the passive reference: a passive test on the same rig
     line = "rig truth differs from design: bearing.mu_max 0.075 (design 0.06)"
     metadata = json.loads((result.session.run_path / "metadata.json").read_text())

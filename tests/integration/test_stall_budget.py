@@ -18,8 +18,7 @@ import uuid
 import pytest
 
 from harness.canbus.link import open_harness, open_rig
-from harness.control.estimator import FrictionEstimator
-from harness.control.factory import build_controller_for_rig
+from harness.control.factory import build_controller_for_rig, make_friction_estimator
 from harness.loop.runner import ControlLoop
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile
@@ -87,7 +86,7 @@ def _run(stall_s: float, step_N: float = 0.0):
         supervisor = Supervisor(profile.safety, period_s=PERIOD_S)
         settle = profile.loop.settle_s
         controller = StallingController(build_controller_for_rig(profile, "phi"), clock, settle + STALL_AT_RUN_S, stall_s, step_N)
-        estimator = FrictionEstimator(profile.bearing, profile.structure.total_weight_N)
+        estimator = make_friction_estimator(profile)
         tick = ControlTick(link, controller, estimator, supervisor, None, heartbeat_every=5)
         sent: list[tuple[float, float, bool]] = []
         command = tick.writer.command
