@@ -198,3 +198,16 @@ def test_a_trip_when_the_profile_says_so_and_the_command_is_watched_too() -> Non
     assert supervisor.state is State.TRIPPED and supervisor.command.trip_reason == "force_oscillation"
     assert supervisor.trip_detail.startswith("commanded force RMS above 30 Hz")
     assert supervisor.oscillation.command_N == 0.0  # the trip's zero command is what it sees next
+
+
+def test_the_detail_gives_each_forces_own_rms() -> None:
+    """Both forces oscillate, at different amplitudes: the detail names each with its own figure."""
+    detector = ForceOscillation(CONFIG)
+    commanded = lambda k: _sine(2_000.0, LIMIT_CYCLE_HZ, k)  # noqa: E731
+    measured = lambda k: _sine(1_000.0, LIMIT_CYCLE_HZ, k)  # noqa: E731
+    assert any(_run(detector, int(1.0 / DT), commanded, measured))
+    commanded_rms, measured_rms = detector.rms_N
+    assert commanded_rms > 1.5 * measured_rms > 0.0
+    detail = detector.detail(TickHealth())
+    assert f"(commanded {commanded_rms:.6g} N, measured {measured_rms:.6g} N)" in detail
+
