@@ -32,7 +32,7 @@ from scipy import optimize
 
 from harness.identification import lti
 from harness.identification.choices import DampingModel
-from harness.identification.fit_statistics import correlation_time, covariance
+from harness.identification.fit_statistics import honest_standard_errors, time_blocks
 from harness.identification.structure_records import StructureRecord
 from harness.model.building import BuildingConfig, fixed_base_modes
 
@@ -214,8 +214,8 @@ def fit_stories(records: Sequence[StructureRecord], design: BuildingConfig, mode
     solution = optimize.least_squares(problem.residuals, start, bounds=(start - spread, upper),
                                       x_scale=np.concatenate([np.full(n, 0.05), np.full(len(damping0), 0.3), [0.5]]))
     theta = solution.x
-    cov = covariance(solution.jac, solution.fun, correlation_time(solution.fun))
-    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    blocks = np.concatenate([np.tile(time_blocks(len(r.base_acceleration)), n) for r in records])
+    se = honest_standard_errors(solution.jac, solution.fun, blocks)
     stiffness, damping = problem.stories(theta)
     stiffness_se = stiffness * se[:n]
     ratio = ratio_se = None
