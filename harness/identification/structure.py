@@ -52,6 +52,7 @@ from harness.identification.story_fit import (
     fit_stories,
     floor_frequency_response,
     undamped_frequencies_hz,
+    with_model_error,
 )
 from harness.identification.structure_plot import response_plot
 from harness.identification.structure_records import (
@@ -299,7 +300,8 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
     measured = frf_estimate(records, RESOLUTION_HZ)
     check_band_bins(measured, band, band_hz is not None)
     modal = fit_modes(records, [float(f) for f in start_frequencies(measured, design, band)])
-    stories = fit_stories(records, design, modal.frequency_hz, float(modal.damping_ratio[0]), model)
+    stories = with_model_error(fit_stories(records, design, modal.frequency_hz, float(modal.damping_ratio[0]), model),
+                               modal.frequency_hz)
     modes, stiffness, damping = _determinations(modal, stories, band)
     out_dir.mkdir(parents=True, exist_ok=True)
     values = overlay_values(stories, modal, design, stiffness, damping)
@@ -347,7 +349,8 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
                   "velocity sensor's derivative below the crossover where their noise is equal; exact first-order-hold "
                   "discretisation), scipy.optimize.least_squares; modes by variable projection; standard errors the larger "
                   f"of the Jacobian's (inflated by the residuals' correlation time) and the spread of {BLOCKS} blocks of time "
-                  "(block sandwich)",
+                  "(block sandwich); the story stiffnesses' widened by twice the story model's largest relative miss of the modal "
+                  "fit's frequencies",
         "interval_95": f"value -/+ {t_factor_95():.4g} standard errors (Student's t, {BLOCKS - 1} degrees of freedom)",
         "files": {"overlay": overlay_path.name, "plot": plot_path.name},
     })

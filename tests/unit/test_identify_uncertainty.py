@@ -117,3 +117,16 @@ def test_the_plot_says_why_the_measured_first_peak_is_lower_than_the_fit():
 
     note = smearing_note(MeasuredResponse(np.arange(0, 10, 0.125), np.zeros((1, 80), dtype=complex), np.ones((1, 80))))
     assert "0.125 Hz" in note and "lower and wider" in note
+
+
+def test_a_story_model_that_misses_the_modes_widens_the_stiffness_errors():
+    from harness.identification.story_fit import StoryFit, with_model_error
+
+    building = DESIGN.structure
+    stiffness = np.asarray(building.story_stiffness_N_per_m, dtype=float)
+    fit = StoryFit(building, "proportional", stiffness, 1e-4 * stiffness, np.ones(3), np.zeros(3), 0.01, 1e-5, 0.0, 0.0, 1)
+    frequency_hz, _ = fit.modes()
+    missed = frequency_hz * np.array([1.0, 1.0, 1.01])  # the modal fit's third mode 1 % above the story model's
+    widened = with_model_error(fit, missed)
+    assert np.allclose(widened.stiffness_se / stiffness, np.hypot(1e-4, 2 * 0.01 / 1.01), rtol=1e-6)
+    assert np.allclose(with_model_error(fit, frequency_hz).stiffness_se, fit.stiffness_se)  # nothing missed, nothing added
