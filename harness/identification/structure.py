@@ -349,8 +349,8 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
                   "velocity sensor's derivative below the crossover where their noise is equal; exact first-order-hold "
                   "discretisation), scipy.optimize.least_squares; modes by variable projection; standard errors the larger "
                   f"of the Jacobian's (inflated by the residuals' correlation time) and the spread of {BLOCKS} blocks of time "
-                  "(block sandwich); the story stiffnesses' widened by twice the story model's largest relative miss of the modal "
-                  "fit's frequencies",
+                  "(block sandwich); the story stiffnesses' widened by twice the story model's largest relative miss of the "
+                  "modal fit's frequencies",
         "interval_95": f"value -/+ {t_factor_95():.4g} standard errors (Student's t, {BLOCKS - 1} degrees of freedom)",
         "files": {"overlay": overlay_path.name, "plot": plot_path.name},
     })
