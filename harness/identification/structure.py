@@ -301,7 +301,7 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
     check_band_bins(measured, band, band_hz is not None)
     modal = fit_modes(records, [float(f) for f in start_frequencies(measured, design, band)])
     stories = with_model_error(fit_stories(records, design, modal.frequency_hz, float(modal.damping_ratio[0]), model),
-                               modal.frequency_hz)
+                               modal.frequency_hz, float(modal.damping_ratio[0]))
     modes, stiffness, damping = _determinations(modal, stories, band)
     out_dir.mkdir(parents=True, exist_ok=True)
     values = overlay_values(stories, modal, design, stiffness, damping)
@@ -350,7 +350,7 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
                   "discretisation), scipy.optimize.least_squares; modes by variable projection; standard errors the larger "
                   f"of the Jacobian's (inflated by the residuals' correlation time) and the spread of {BLOCKS} blocks of time "
                   "(block sandwich); the story stiffnesses' widened by twice the story model's largest relative miss of the "
-                  "modal fit's frequencies",
+                  "modal fit's frequencies, the first-mode damping ratio's by its difference from the modal fit's",
         "interval_95": f"value -/+ {t_factor_95():.4g} standard errors (Student's t, {BLOCKS - 1} degrees of freedom)",
         "files": {"overlay": overlay_path.name, "plot": plot_path.name},
     })

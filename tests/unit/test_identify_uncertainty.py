@@ -130,3 +130,5 @@ def test_a_story_model_that_misses_the_modes_widens_the_stiffness_errors():
     widened = with_model_error(fit, missed)
     assert np.allclose(widened.stiffness_se / stiffness, np.hypot(1e-4, 2 * 0.01 / 1.01), rtol=1e-6)
     assert np.allclose(with_model_error(fit, frequency_hz).stiffness_se, fit.stiffness_se)  # nothing missed, nothing added
+    assert with_model_error(fit, frequency_hz, 0.0103).first_mode_damping_se == pytest.approx(np.hypot(1e-5, 0.0003))
+    assert with_model_error(fit, frequency_hz, 0.01).first_mode_damping_se == pytest.approx(1e-5)
