@@ -55,6 +55,7 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from pathlib import Path
 
+    from harness.identification.fit_statistics import interval_95
     from harness.identification.run_signals import IdentificationError
     from harness.identification.structure import identify_structure
     from harness.model.warmup import warm_up
@@ -68,9 +69,11 @@ def run(args: argparse.Namespace, console: Console) -> int:
                   highlight=False)
     for r, determination in enumerate(result.modes):
         mark = "[green]determined[/]" if determination.determined else "[yellow]not determined[/]"
-        console.print(f"  mode {r + 1}: {modal.frequency_hz[r]:.4g} +/- {modal.frequency_se_hz[r]:.2g} Hz, damping "
-                      f"{modal.damping_ratio[r]:.3g} +/- {modal.damping_se[r]:.2g} ({mark}); story model {story_hz[r]:.4g} Hz, "
-                      f"{story_zeta[r]:.3g}", highlight=False)
+        f_low, f_high = interval_95(float(modal.frequency_hz[r]), float(modal.frequency_se_hz[r]))
+        z_low, z_high = interval_95(float(modal.damping_ratio[r]), float(modal.damping_se[r]))
+        console.print(f"  mode {r + 1}: {modal.frequency_hz[r]:.4g} Hz (95 % {f_low:.4g}-{f_high:.4g}), damping "
+                      f"{modal.damping_ratio[r]:.3g} (95 % {z_low:.3g}-{z_high:.3g}) ({mark}); story model "
+                      f"{story_hz[r]:.4g} Hz, {story_zeta[r]:.3g}", highlight=False)
     stiffness = ", ".join(f"{k:.4g}" for k in stories.stiffness_N_per_m)
     design = ", ".join(f"{k:.4g}" for k in result.design.story_stiffness_N_per_m)
     console.print(f"  story stiffness [{stiffness}] N/m (profile [{design}]): "

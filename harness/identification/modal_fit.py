@@ -30,7 +30,7 @@ import numpy as np
 from scipy import optimize
 
 from harness.identification import lti
-from harness.identification.fit_statistics import correlation_time, covariance
+from harness.identification.fit_statistics import honest_standard_errors, time_blocks
 from harness.identification.structure_records import StructureRecord
 
 #: Damping ratio the search starts from.
@@ -116,9 +116,8 @@ def fit_modes(records: Sequence[StructureRecord], start_hz: Sequence[float]) -> 
     solution = optimize.least_squares(problem.residuals, start, bounds=(lower, upper),
                                       x_scale=np.concatenate([np.full(m, 0.01), np.full(m, 0.3), [0.5]]))
     theta = solution.x
-    tau = correlation_time(solution.fun)
-    cov = covariance(solution.jac, solution.fun, tau)
-    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    samples = np.concatenate([time_blocks(len(r.base_acceleration)) for r in records])
+    se = honest_standard_errors(solution.jac, solution.fun, np.tile(samples, records[0].floor_accelerations.shape[0]))
     omega = problem.omega0 * np.exp(theta[:m])
     damping = np.exp(theta[m:2 * m])
     order = np.argsort(omega)

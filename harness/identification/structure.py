@@ -1,8 +1,9 @@
 """``harness identify structure``: fixed-base modes, then story stiffness and damping, from run folders.
 
 1. Each run's base-mat and floor accelerations, band-passed alike and decimated
-   (:mod:`harness.identification.structure_records`); the measured response ``a_j / a_b``
-   (H1) gives the starting frequencies and the plot.
+   (:mod:`harness.identification.structure_records`; the base mat's acceleration blended
+   with its differentiated velocity where that is quieter, so the input's noise does not bias
+   the damping); the measured response ``a_j / a_b`` (H1) gives the starting frequencies and the plot.
 2. The modes: frequencies, damping ratios and participations, fitted in the time domain
    without the masses (:mod:`harness.identification.modal_fit`).
 3. The stories: stiffness and damping of the shear building with the profile's masses that
@@ -24,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.identification.choices import MIN_BAND_BINS
-from harness.identification.fit_statistics import relative_error
+from harness.identification.fit_statistics import BLOCKS, relative_error, t_factor_95
 from harness.identification.modal_fit import ModalFit, fit_modes, modal_response
 from harness.identification.outputs import (
     OVERLAY_FILE,
@@ -51,12 +52,15 @@ from harness.identification.story_fit import (
     fit_stories,
     floor_frequency_response,
     undamped_frequencies_hz,
+    with_model_error,
 )
 from harness.identification.structure_plot import response_plot
 from harness.identification.structure_records import (
     MeasuredResponse,
     StructureRecord,
     band_passed,
+    base_acceleration_estimate,
+    crossover_hz,
     frf_estimate,
 )
 from harness.model.building import BuildingConfig, fixed_base_modes
@@ -118,13 +122,29 @@ def structure_record(run: RunData, n_stories: int, band_hz: tuple[float, float] 
     """
     needed = {layout.BASE_ACCELERATION: "absolute acceleration of the base mat (m/s^2), the input", **floor_columns(n_stories)}
     require_columns(run, needed, PURPOSE)
-    rate_hz, signals = uniform_signals(run, needed)
+    with_velocity = run.has(layout.BASE_VELOCITY)
+    rate_hz, signals = uniform_signals(run, [*needed, *((layout.BASE_VELOCITY,) if with_velocity else ())])
     band = band_hz if band_hz is not None else default_band(design, rate_hz)
     if band[1] >= 0.45 * rate_hz:
         raise IdentificationError(f"run {run.path}: the band's upper frequency {band[1]:g} Hz is too close to the Nyquist "
                                   f"frequency of its {rate_hz:g} Hz rows; expected at most {0.4 * rate_hz:g} Hz (--band-hz)")
     floors = [signals[layout.floor_acceleration(j)] for j in range(1, n_stories + 1)]
-    return band_passed(run.path.name, rate_hz, signals[layout.BASE_ACCELERATION], floors, band), band
+    base = signals[layout.BASE_ACCELERATION]
+    if with_velocity:
+        base = base_acceleration_estimate(rate_hz, base, signals[layout.BASE_VELOCITY], input_crossover_hz(run, rate_hz))
+    return band_passed(run.path.name, rate_hz, base, floors, band), band
+
+
+def input_crossover_hz(run: RunData, rate_hz: float) -> float:
+    """The crossover of the base mat's acceleration estimate (Hz) from the run's profile's sensor noise (``rig.sensors``).
+
+    See :mod:`harness.identification.structure_records`; a profile without the sensors' noise
+    gives the accelerometer alone.
+    """
+    sensors = (run.profile.get("rig") or {}).get("sensors") or {}
+    acceleration = float((sensors.get("acceleration") or {}).get("noise_std_m_s2", 0.0) or 0.0)
+    velocity = float((sensors.get("velocity") or {}).get("noise_std_m_s", 0.0) or 0.0)
+    return crossover_hz(acceleration, velocity, rate_hz)
 
 
 def check_band_bins(measured: MeasuredResponse, band_hz: tuple[float, float], given: bool) -> None:
@@ -226,14 +246,16 @@ def overlay_values(stories: StoryFit, modal: ModalFit, design: BuildingConfig, s
     if stiffness.determined:
         errors = ", ".join(f"{100 * se / k:.2g}" for k, se in zip(stories.stiffness_N_per_m, stories.stiffness_se, strict=True))
         values.append(OverlayValue("story_stiffness_N_per_m", tuple(float(k) for k in stories.stiffness_N_per_m),
-                                   f"1 SE {errors} %; {quality}; profile had "
+                                   f"1 SE {errors} % (95 %: {t_factor_95():.3g} SE); {quality}; profile had "
                                    f"{', '.join(f'{k:.4g}' for k in design.story_stiffness_N_per_m)}"))
     if damping.determined:
         zetas = ", ".join(f"{z:.3g}" for z in ratio)
         if stories.first_mode_damping_ratio is not None:
             values.append(OverlayValue("first_mode_damping_ratio", stories.first_mode_damping_ratio,
-                                       f"+/- {stories.first_mode_damping_se:.2g} (1 SE); stiffness-proportional: mode "
-                                       f"damping {zetas}; modal fit {', '.join(f'{z:.3g}' for z in modal.damping_ratio)}"))
+                                       f"+/- {stories.first_mode_damping_se:.2g} (1 SE; 95 % +/- "
+                                       f"{t_factor_95() * (stories.first_mode_damping_se or 0):.2g}); "
+                                       f"stiffness-proportional: mode damping {zetas}; modal fit "
+                                       f"{', '.join(f'{z:.3g}' for z in modal.damping_ratio)}"))
             if design.story_damping_Ns_per_m is not None:
                 values.append(OverlayValue("story_damping_Ns_per_m", None, "cleared: the damping is given as a ratio"))
         else:
@@ -278,7 +300,8 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
     measured = frf_estimate(records, RESOLUTION_HZ)
     check_band_bins(measured, band, band_hz is not None)
     modal = fit_modes(records, [float(f) for f in start_frequencies(measured, design, band)])
-    stories = fit_stories(records, design, modal.frequency_hz, float(modal.damping_ratio[0]), model)
+    stories = with_model_error(fit_stories(records, design, modal.frequency_hz, float(modal.damping_ratio[0]), model),
+                               modal.frequency_hz, float(modal.damping_ratio[0]))
     modes, stiffness, damping = _determinations(modal, stories, band)
     out_dir.mkdir(parents=True, exist_ok=True)
     values = overlay_values(stories, modal, design, stiffness, damping)
@@ -322,9 +345,13 @@ def identify_structure(paths: Sequence[Path | str], out_dir: Path, band_hz: tupl
             "profile_story_stiffness_N_per_m": list(design.story_stiffness_N_per_m),
             "delay_s": stories.delay_s, "rms_error_m_s2": stories.rms_error_m_s2, "evaluations": stories.evaluations,
         },
-        "method": "time-domain output error: models driven by the measured base-mat acceleration (exact first-order-hold "
-                  "discretisation), scipy.optimize.least_squares; modes by variable projection; standard errors from the "
-                  "Jacobian, inflated by the residuals' correlation time",
+        "method": "time-domain output error: models driven by the base mat's acceleration (the accelerometer above, the "
+                  "velocity sensor's derivative below the crossover where their noise is equal; exact first-order-hold "
+                  "discretisation), scipy.optimize.least_squares; modes by variable projection; standard errors the larger "
+                  f"of the Jacobian's (inflated by the residuals' correlation time) and the spread of {BLOCKS} blocks of time "
+                  "(block sandwich); the story stiffnesses' widened by twice the story model's largest relative miss of the "
+                  "modal fit's frequencies, the first-mode damping ratio's by its difference from the modal fit's",
+        "interval_95": f"value -/+ {t_factor_95():.4g} standard errors (Student's t, {BLOCKS - 1} degrees of freedom)",
         "files": {"overlay": overlay_path.name, "plot": plot_path.name},
     })
     return StructureIdentification(modal, stories, design, band, modes, stiffness, damping, used, overlay_path, record_path,

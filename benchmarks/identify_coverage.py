@@ -1,0 +1,96 @@
+"""Does the structure identification's stated 95 % interval cover the truth? Coverage over seeds on the virtual rig.
+
+For each seed, the README's commissioning step 4 on the virtual rig with the shipped profile
+(its own values are the truth: no ``rig.truth``): ``harness dry-run --lockstep --record
+white_noise:0.5-20 --duration S --set record.seed=SEED``, then ``harness identify structure``
+on its run folder (a run stopped early by a check, exit status 4, is identified on the rows it
+recorded, as a lab would). For every identified value (three modal frequencies and damping
+ratios, three story stiffnesses, the story model's first-mode damping ratio) it counts the
+seeds whose stated 95 % interval (:func:`harness.identification.fit_statistics.interval_95`) holds the truth, and
+prints a markdown table: covered seeds, the mean error and the mean stated half-width.
+
+Usage: python benchmarks/identify_coverage.py [--seeds N] [--duration S] [--workers W] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+import numpy as np  # noqa: E402
+
+from harness.cli import main  # noqa: E402
+from harness.identification.fit_statistics import t_factor_95  # noqa: E402
+from harness.identification.structure import identify_structure  # noqa: E402
+from harness.model.building import fixed_base_modes  # noqa: E402
+from harness.profile import load_profile  # noqa: E402
+
+
+def truth() -> dict[str, float]:
+    """The shipped profile's structure: what the virtual rig runs when no ``rig.truth`` is set."""
+    structure = load_profile().structure
+    omega, zeta = fixed_base_modes(structure)
+    values = {f"mode {r + 1} frequency (Hz)": float(omega[r] / (2 * np.pi)) for r in range(3)}
+    values |= {f"mode {r + 1} damping ratio": float(zeta[r]) for r in range(3)}
+    values |= {f"story {j + 1} stiffness (N/m)": float(k) for j, k in enumerate(structure.story_stiffness_N_per_m)}
+    values["first-mode damping ratio (story model)"] = float(structure.first_mode_damping_ratio or np.nan)
+    return values
+
+
+def one_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, float]]:
+    """(identified, standard error) per value for one seed."""
+    seed, duration_s, out = job
+    logs = out / f"seed{seed}"
+    if not logs.is_dir():  # an earlier call's run folder is reused (--out): the runs are the slow part
+        status = main(["dry-run", "--lockstep", "--quiet", "--log-dir", str(logs), "--record", "white_noise:0.5-20",
+                       "--duration", f"{duration_s:g}", "--set", f"record.seed={seed}"])
+        if status not in (0, 4):  # 4: stopped early by a check; its rows up to the stop are still a measurement
+            raise SystemExit(f"seed {seed}: dry run ended with exit status {status}")
+    (folder,) = [p for p in logs.iterdir() if (p / "metadata.json").is_file()]
+    found = identify_structure([folder], out / f"ident{seed}", force=True)
+    modal, stories = found.modal, found.stories
+    values = {f"mode {r + 1} frequency (Hz)": (modal.frequency_hz[r], modal.frequency_se_hz[r]) for r in range(3)}
+    values |= {f"mode {r + 1} damping ratio": (modal.damping_ratio[r], modal.damping_se[r]) for r in range(3)}
+    values |= {f"story {j + 1} stiffness (N/m)": (stories.stiffness_N_per_m[j], stories.stiffness_se[j]) for j in range(3)}
+    values["first-mode damping ratio (story model)"] = (stories.first_mode_damping_ratio or np.nan,
+                                                        stories.first_mode_damping_se or np.nan)
+    return {k: (float(v), float(se)) for k, (v, se) in values.items()}
+
+
+def table(results: list[dict[str, tuple[float, float]]]) -> str:
+    t = t_factor_95()
+    lines = [f"| value | truth | covered (of {len(results)}) | mean error | largest error | mean stated 95 % half-width |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for name, true in truth().items():
+        found = np.array([r[name][0] for r in results])
+        half = t * np.array([r[name][1] for r in results])
+        covered = int(np.count_nonzero(np.abs(found - true) <= half))
+        error = found / true - 1.0
+        lines.append(f"| {name} | {true:.5g} | {covered} | {100 * error.mean():+.2f} % | "
+                     f"{100 * error[np.argmax(np.abs(error))]:+.2f} % | {100 * np.mean(half / true):.2f} % |")
+    return "\n".join(lines)
+
+
+def run(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--duration", type=float, default=30.0, help="white-noise dry run length (s)")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=None, help="where the run folders go (default: temp)")
+    args = parser.parse_args(argv)
+    out = args.out or Path(tempfile.mkdtemp(prefix="identify-coverage-"))
+    with ProcessPoolExecutor(args.workers) as pool:
+        results = list(pool.map(one_seed, [(seed, args.duration, out) for seed in range(args.seeds)]))
+    print(table(results))
+    print(f"\n{args.seeds} seeds, {args.duration:g} s lockstep white-noise dry runs; run folders in {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(run())
