@@ -46,7 +46,7 @@ def test_the_profile_keeps_the_overlays_file_and_hash_through_a_resolved_copy(ov
 
 def test_an_overlay_that_weakens_safety_is_listed_as_a_weakening(tmp_path) -> None:
     weak = tmp_path / "weak.yaml"
-    weak.write_text("safety:\n  force:\n    tracking_tolerance_N: 5000\n")
+    weak.write_text("safety:\n  force:\n    tracking_tolerance_N: 2000\n")
     profile = load_profile(NCEER, overlay=weak)
     assert [w.key for w in profile.safety_weakened] == ["safety.force.tracking_tolerance_N"]
     strict = tmp_path / "strict.yaml"
