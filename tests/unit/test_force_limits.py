@@ -138,3 +138,21 @@ def test_the_profile_must_put_the_load_cell_limit_above_max_force_and_the_comman
     supply = MAX + FLOW
     assert not any("max_flow_term_N" in p for p in problems(supply_force_N=supply))
     assert any("max_flow_term_N" in p for p in problems(supply_force_N=supply - 1.0))
+
+
+def test_load_cell_limits_detail_word_for_word_and_its_peak_from_zero() -> None:
+    check = LoadCellLimit(FORCE)
+    health = TickHealth()
+    health.measured_force_N = -0.5  # below 1 N: a peak that started anywhere but 0 would not show it
+    check.update(0.0, DT, health)
+    assert check.peak_N == 0.5
+    check.reset()
+    health.measured_force_N = 0.25
+    check.update(DT, DT, health)
+    assert check.peak_N == 0.25
+    health.measured_force_N = 13_000.0
+    assert check.detail(health) == (
+        f"load cell 13000 N beyond +/-{CELL:g} N (safety.force.load_cell_limit_N) "
+        f"for {FORCE.load_cell_limit_time_s * 1e3:g} ms; expected within: the load path carries more than any "
+        "healthy command gives (a blocked piston, a servo controller's feed-forward or loop out of bounds)"
+    )

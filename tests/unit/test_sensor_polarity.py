@@ -140,3 +140,48 @@ def test_the_supervisor_trips_sensor_polarity_and_names_the_pair() -> None:
     assert command.trip_reason == "sensor_polarity"
     assert "y_b/ydot_b" in supervisor.trip_detail
     assert isinstance(supervisor, Supervisor) and supervisor.state is State.TRIPPED
+
+
+@pytest.mark.parametrize("after_reset", [False, True])
+def test_the_first_product_is_averaged_into_a_mean_at_zero_also_after_a_reset(after_reset: bool) -> None:
+    """The running means start primed at zero (at construction and after a reset): the first product, +v^2
+    while both filters prime at the same velocity, moves the mean by ``dt / (window + dt)`` of it; a mean
+    that took its first input as is would start at v^2 (or at -v^2 for a flipped pair, and fire early)."""
+    speed = 0.01
+    det = SensorPolarity(UNFILTERED)
+    health = TickHealth()
+    if after_reset:
+        health.meas.base_displacement_m, health.meas.base_velocity_m_s = 0.003, 0.2
+        det.update(0.0, DT, health)
+        det.reset()
+    health.meas.base_displacement_m, health.meas.base_velocity_m_s = 0.0, speed
+    det.update(DT, DT, health)
+    expected = speed**2 * DT / (UNFILTERED.polarity_window_s + DT)
+    assert det.mean_m2_s2(1) == pytest.approx(expected, rel=1e-9)
+
+
+def test_a_mean_exactly_on_the_threshold_is_not_a_fault() -> None:
+    """The condition is ``mean < -floor^2``: a mean that sits exactly on it holds (the boundary, to the bit)."""
+    det = SensorPolarity(SENSORS)
+    floor = SENSORS.polarity_floor_m_s
+    det._deriv[0].y, det._vel[0].y = floor, -floor  # the product is exactly the threshold ...
+    det._mean[0].reset(det.threshold_m2_s2, True)  # ... and so is the mean: it stays there
+    det._dt = DT
+    assert det.threshold_m2_s2 == -floor * floor
+    assert not det._bad(0)
+    det._mean[0].reset(math.nextafter(det.threshold_m2_s2, -math.inf), True)
+    det._deriv[0].y = math.nextafter(floor, math.inf)
+    assert det._bad(0)
+
+
+def test_the_detail_word_for_word() -> None:
+    det = SensorPolarity(SENSORS)
+    det._pair = 1
+    det._mean[1].reset(-2.5e-6, True)
+    floor = SENSORS.polarity_floor_m_s
+    assert det.detail(TickHealth()) == (
+        "polarity of y_b/ydot_b: running mean of dy_b/dt * ydot_b (filtered) = -2.5e-06 m^2/s^2, "
+        f"expected at least {-floor * floor:.6g} m^2/s^2 "
+        f"(-({floor:g} m/s)^2): the velocity moves against the displacement (a polarity or wiring fault the "
+        "sign check's floor hides)"
+    )
