@@ -168,7 +168,9 @@ BAD_ARGUMENTS = {
         ["safety.comms.error_frame_action safe_stop -> indicate", "--allow-weaker-safety"],
     ),
     "max_force_beyond_the_dbc_with_the_flag": (
-        ["dry-run", "--set", "safety.force.max_force_N=40000", "--allow-weaker-safety"],
+        ["dry-run", "--set", "safety.force.max_force_N=40000", "--allow-weaker-safety",
+         # a load-cell limit and a supply force above it, so that the protocol's bound is the one that speaks
+         "--set", "safety.force.load_cell_limit_N=60000", "--set", "safety.force.supply_force_N=60000"],
         ["safety.force.max_force_N", "found 40000 N", "expected at most 30000 N", "ACTUATOR_CMD"],
     ),
     # --- second review (issue 19): a traceback (exit 1) ---

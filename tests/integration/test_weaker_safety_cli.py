@@ -57,7 +57,9 @@ def test_a_milder_detector_action_is_refused_without_the_flag(tmp_path, capsys):
 
 def test_max_force_beyond_the_protocol_is_refused_whatever_the_flag(tmp_path, capsys):
     for flag in ([], ["--allow-weaker-safety"]):
-        status, _, err = _dry_run(tmp_path, capsys, "--set", "safety.force.max_force_N=40000", *flag)
+        # a load-cell limit and a supply force above it, so that the protocol's bound is the one that speaks
+        roomy = ("--set", "safety.force.load_cell_limit_N=60000", "--set", "safety.force.supply_force_N=60000")
+        status, _, err = _dry_run(tmp_path, capsys, "--set", "safety.force.max_force_N=40000", *roomy, *flag)
         assert status == exit_codes.INPUT_ERROR
         assert "safety.force.max_force_N: found 40000 N, expected at most 30000 N" in err and "ACTUATOR_CMD" in err
         assert _no_run_folder(tmp_path)
