@@ -46,8 +46,8 @@ def test_a_white_noise_dry_run_identifies_the_rigs_structure(tmp_path, capsys):
     assert np.allclose(overlay["story_stiffness_N_per_m"], TRUE_STIFFNESS, rtol=0.1)
     truth = dataclasses.replace(DESIGN.structure, story_stiffness_N_per_m=TRUE_STIFFNESS)
     true_omega, true_zeta = fixed_base_modes(truth)
-    found = [float(line.split("mode ")[1].split(": ")[1].split(" +/-")[0]) for line in printed.splitlines()
-             if line.strip().startswith("mode ")]
+    found = [float(line.split("mode ")[1].split(": ")[1].split(" Hz")[0]) for line in printed.splitlines()
+             if line.strip().startswith("mode ")]  # "mode 1: 2.398 Hz (95 % 2.397-2.399), damping ..."
     assert np.allclose(found, true_omega / (2 * np.pi), rtol=0.02)
     assert overlay["first_mode_damping_ratio"] == pytest.approx(true_zeta[0], rel=0.3)
 
@@ -56,7 +56,18 @@ def test_a_white_noise_dry_run_identifies_the_rigs_structure(tmp_path, capsys):
 def test_an_earthquake_dry_run_identifies_the_rigs_bearing(tmp_path, capsys):
     run = _dry_run(tmp_path / "logs", "--duration", "30")
     status = main(["identify", "bearing", str(run), "--out", str(tmp_path / "ident")])
-    assert status == exit_codes.OK, capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert status == exit_codes.OK, printed
     overlay = yaml.safe_load((tmp_path / "ident" / "identified.yaml").read_text())["bearing"]
+    estimates = {line.split(" = ")[0].strip(): line for line in printed.splitlines() if " = " in line and "+/-" in line}
     for key, value in TRUE_BEARING.items():
-        assert overlay[key] == pytest.approx(value, rel=0.1), key
+        if key in overlay:
+            assert overlay[key] == pytest.approx(value, rel=0.1), key
+        else:
+            # Left out of the overlay by the fit's quality gate (standard error above 10 %): a_mu, the shape of
+            # the velocity law, needs slow sliding through many reversals, and the shipped controller (the
+            # estimator's 6 dB margin) leaves fewer of them in 30 s (22 % measured; 13 % in 60 s). The estimate
+            # printed beside "not determined" must still be near the truth.
+            assert key == "a_mu_s_per_m" and "not determined" in estimates[key], printed
+            assert float(estimates[key].split(" = ")[1].split(" +/-")[0]) == pytest.approx(value, rel=0.1), printed
+    assert {"mu_max", "mu_delta"} <= set(overlay)
