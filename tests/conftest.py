@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+
+from drivers.seqpacket.bus import SeqPacketBus
 
 REPO = Path(__file__).resolve().parent.parent
 PROFILES = REPO / "profiles"
@@ -44,3 +47,12 @@ def rig():
     from harness.profile import load_profile
 
     return load_profile(PROFILES / "nceer_4dof.yaml").structure
+
+
+@pytest.fixture
+def buses() -> Iterator[list[SeqPacketBus]]:
+    """``seqpacket`` buses a test opens; all shut down afterwards."""
+    opened: list[SeqPacketBus] = []
+    yield opened
+    for bus in opened:
+        bus.shutdown()

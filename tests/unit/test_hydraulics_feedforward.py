@@ -15,18 +15,10 @@ import numpy as np
 import pytest
 
 from harness.model import hydraulics as hy
-from harness.model.bearing import BearingConfig
-from harness.model.building import BuildingConfig
 from harness.model.plant import Plant, TableMotion
 from harness.model.servo_controller import StrokeLvdtConfig, StrokeVelocityFeedforward, VelocityFeedforwardConfig, steady_bleed_N
-from harness.profile import load_profile
+from tests.unit.test_hydraulics import ACTUATOR, CYLINDER, FRICTIONLESS, IMMOVABLE  # the same known plant
 
-PROFILE = load_profile(None)
-ACTUATOR = PROFILE.rig.actuator.hydraulics
-CYLINDER = ACTUATOR.cylinder
-FRICTIONLESS = BearingConfig(mu_max=0.0, mu_delta=0.0, a_mu_s_per_m=0.0, yield_displacement_m=2.5e-5, eta=3)
-IMMOVABLE = BuildingConfig(floor_masses_kg=(958.0,), base_mass_kg=1.0e12, story_stiffness_N_per_m=(0.73e6,),
-                           first_mode_damping_ratio=0.01)
 SUBSTEP_S = 0.0005
 #: Ideal sensing: no noise, no quantization, no delay (the filter's lag settles at constant velocity).
 IDEAL_LVDT = StrokeLvdtConfig(noise_std_m=0.0, quantization_m=0.0, delay_s=0.0)

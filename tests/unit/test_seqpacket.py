@@ -191,15 +191,6 @@ def channel() -> str:
 
 
 @pytest.fixture
-def buses() -> Iterator[list[SeqPacketBus]]:
-    """Buses a test opens; all shut down afterwards."""
-    opened: list[SeqPacketBus] = []
-    yield opened
-    for bus in opened:
-        bus.shutdown()
-
-
-@pytest.fixture
 def children() -> Iterator[list[Child]]:
     started: list[Child] = []
     yield started

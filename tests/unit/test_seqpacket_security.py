@@ -105,12 +105,6 @@ def strangers() -> Iterator[list[Stranger]]:
         child.finish()
 
 
-@pytest.fixture
-def buses() -> Iterator[list[SeqPacketBus]]:
-    opened: list[SeqPacketBus] = []
-    yield opened
-    for bus in opened:
-        bus.shutdown()
 
 
 @pytest.fixture
