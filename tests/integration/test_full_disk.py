@@ -61,6 +61,17 @@ def _dry_run_process(log_dir: Path, duration_s: str) -> subprocess.Popen:
     )
 
 
+
+def _fill(path: Path) -> None:
+    """Write zeros into ``path`` until its file system is full (ENOSPC)."""
+    with open(path, "wb") as filler:
+        try:
+            while True:
+                filler.write(b"\0" * 65536)
+                filler.flush()
+        except OSError:
+            pass
+
 def test_the_reviews_2_mb_disk_is_refused_before_the_rig_starts_with_the_estimate(tmpfs) -> None:
     log_dir = tmpfs("2m")
     process = _dry_run_process(log_dir, "20")
@@ -74,13 +85,7 @@ def test_the_reviews_2_mb_disk_is_refused_before_the_rig_starts_with_the_estimat
 
 def test_a_disk_already_full_is_refused_before_the_rig_starts(tmpfs, monkeypatch, capsys) -> None:
     log_dir = tmpfs("2m")
-    with open(log_dir / "filler", "wb") as filler:
-        try:
-            while True:
-                filler.write(b"\0" * 65536)
-                filler.flush()
-        except OSError:
-            pass
+    _fill(log_dir / "filler")
     import harness.runs.dry_run as dry_run
 
     started = []
@@ -101,13 +106,7 @@ def test_a_disk_filling_mid_run_stops_the_run_safely_marks_it_and_exits_3(tmpfs)
     (folder,) = [p for p in log_dir.iterdir() if p.is_dir()]
     while (folder / "signals.csv").stat().st_size < 300_000 and process.poll() is None:  # well into the run
         time.sleep(0.02)
-    with open(log_dir / "filler", "wb") as filler:  # another writer fills the disk
-        try:
-            while True:
-                filler.write(b"\0" * 65536)
-                filler.flush()
-        except OSError:
-            pass
+    _fill(log_dir / "filler")  # another writer fills the disk
     out, err = process.communicate(timeout=300)
     text = _outcome(out + err)
     assert "Traceback" not in text
