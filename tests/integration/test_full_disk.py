@@ -61,16 +61,20 @@ def _dry_run_process(log_dir: Path, duration_s: str) -> subprocess.Popen:
     )
 
 
-
 def _fill(path: Path) -> None:
-    """Write zeros into ``path`` until its file system is full (ENOSPC)."""
-    with open(path, "wb") as filler:
+    """Write zeros into ``path`` until its file system is full (ENOSPC).
+
+    Unbuffered: a buffered file keeps the bytes the full disk refused and raises ENOSPC again when
+    it is closed (CI saw exactly that, reported at the ``with open`` line).
+    """
+    with open(path, "wb", buffering=0) as filler:
         try:
             while True:
                 filler.write(b"\0" * 65536)
-                filler.flush()
-        except OSError:
-            pass
+        except OSError as error:
+            if error.errno != errno.ENOSPC:
+                raise
+
 
 def test_the_reviews_2_mb_disk_is_refused_before_the_rig_starts_with_the_estimate(tmpfs) -> None:
     log_dir = tmpfs("2m")
