@@ -83,7 +83,7 @@ from can import BusABC, CanOperationError, CanProtocol, Message
 
 from drivers.errors import BusError
 from drivers.seqpacket.channel import ABSTRACT_PREFIX, check_directory, ensure_private_directory, parse_channel
-from drivers.seqpacket.peers import PeerPolicy
+from drivers.seqpacket.peers import PeerCredentials, PeerPolicy, describe_refusal
 from drivers.seqpacket.wire import HEADER, MAX_DATAGRAM_BYTES, decode_frame, encode_frame
 
 LOG = logging.getLogger(__name__)
@@ -173,7 +173,8 @@ class SeqPacketBus(BusABC):
     ) -> None:
         self._addr = parse_channel(channel)
         self._policy = PeerPolicy.make(peer_group, peer_pids)
-        self.refused_peers: list[str] = []
+        self._refusal_notes: list[str] = []
+        self._refusals_to_describe: list[tuple[str, PeerCredentials | OSError]] = []
         self.refused_count = 0
         self.channel = channel
         self.receive_own_messages = bool(receive_own_messages)
@@ -517,15 +518,39 @@ class SeqPacketBus(BusABC):
         else:
             check_directory(directory, self._policy.group_gid)
 
-    def _refuse(self, sock: socket.socket, reason: str, role: str) -> str:
-        """Close ``sock`` (a connection refused by the peer check), note why, and return the note."""
+    @property
+    def refused_peers(self) -> list[str]:
+        """Why each refused connection was refused (the first :data:`MAX_REFUSALS_KEPT`).
+
+        A connection the hub refused during a loop tick was only screened then (no name lookup,
+        no log line); it is described, and its warning logged, here, on the first read after it.
+        """
+        self._describe_refusals()
+        return list(self._refusal_notes)
+
+    def _describe_refusals(self) -> None:
+        pending, self._refusals_to_describe = self._refusals_to_describe, []
+        for role, refused in pending:
+            self._note_refusal(role, describe_refusal(self._policy, refused))
+
+    def _note_refusal(self, role: str, reason: str) -> str:
         note = f"refused {role} on seqpacket channel {self.channel!r}: {reason}"
-        self.refused_count += 1
-        if len(self.refused_peers) < MAX_REFUSALS_KEPT:
-            self.refused_peers.append(note)
-            LOG.warning("seqpacket: %s", note)
-        sock.close()
+        self._refusal_notes.append(note)
+        LOG.warning("seqpacket: %s", note)
         return note
+
+    def _refuse(self, sock: socket.socket, reason: str, role: str) -> str:
+        """Close ``sock`` (a connection refused by the peer check), note why now, and return the note."""
+        sock.close()
+        self.refused_count += 1
+        return self._note_refusal(role, reason)
+
+    def _refuse_quietly(self, sock: socket.socket, refused: PeerCredentials | OSError, role: str) -> None:
+        """Close ``sock`` and count it; describing it waits for :attr:`refused_peers` (tick-safe)."""
+        sock.close()
+        self.refused_count += 1
+        if len(self._refusal_notes) + len(self._refusals_to_describe) < MAX_REFUSALS_KEPT:
+            self._refusals_to_describe.append((role, refused))
 
     def _join_abstract(self) -> None:
         for _ in range(3):  # a node that lost the race to bind connects to the winner
@@ -612,9 +637,9 @@ class SeqPacketBus(BusABC):
             except OSError as err:  # ECONNABORTED etc.: that connection is gone
                 LOG.debug("seqpacket: accept on %r failed: %s", self.channel, err)
                 break
-            refusal = self._policy.check(sock)
-            if refusal:  # closed before anything is read from it or sent to it
-                self._refuse(sock, refusal, "a connection")
+            refused = self._policy.screen(sock)
+            if refused is not None:  # closed before anything is read from it or sent to it
+                self._refuse_quietly(sock, refused, "a connection")
                 continue
             sock.setblocking(False)
             self._size_buffers(sock)
@@ -663,8 +688,10 @@ class SeqPacketBus(BusABC):
     def shutdown(self) -> None:
         """Close every socket (the listener first, so peers cannot reconnect to a dying hub).
 
-        Idempotent. The hub unlinks the socket file it created.
+        Idempotent. The hub unlinks the socket file it created. Connections refused during the run
+        are described and logged now, if nothing read :attr:`refused_peers` before.
         """
+        self._describe_refusals()
         super().shutdown()
         with self._lock:
             if self._closed:

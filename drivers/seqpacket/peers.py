@@ -105,21 +105,45 @@ class PeerPolicy:
         gid, members = resolve_group(group)
         return cls(os.geteuid(), gid, members, frozenset(int(p) for p in pids or ()))
 
+    def admits(self, peer: PeerCredentials) -> bool:
+        """Whether ``peer`` is admitted: set lookups only, no user-name lookup (safe inside a loop tick)."""
+        if self.pids and peer.pid not in self.pids:
+            return False
+        return peer.uid == self.uid or (
+            self.group_gid is not None and (peer.gid == self.group_gid or peer.uid in self.member_uids)
+        )
+
     def refusal(self, peer: PeerCredentials) -> str:
-        """Why ``peer`` is refused; "" when it is admitted."""
+        """Why ``peer`` is refused; "" when it is admitted. Looks the user's name up (outside a tick)."""
+        if self.admits(peer):
+            return ""
         if self.pids and peer.pid not in self.pids:
             expected = ", ".join(str(p) for p in sorted(self.pids))
             return f"{peer.describe()} is not the process this bus expects (pid {expected})"
-        if peer.uid == self.uid:
-            return ""
-        if self.group_gid is not None and (peer.gid == self.group_gid or peer.uid in self.member_uids):
-            return ""
         allowed = f"uid {self.uid}" + ("" if self.group_gid is None else f" or a member of group gid {self.group_gid}")
         return f"{peer.describe()} is another user; only {allowed} may join (can.peer_group names a group to admit)"
 
     def check(self, sock: socket.socket) -> str:
         """Why the peer at the other end of ``sock`` is refused; "" when it is admitted."""
+        return describe_refusal(self, self.screen(sock))
+
+    def screen(self, sock: socket.socket) -> PeerCredentials | OSError | None:
+        """The refused peer at the other end of ``sock`` (or why its credentials cannot be read); None if admitted.
+
+        One ``getsockopt`` and set lookups: no name lookup and no text, so the hub can screen a
+        connection inside a loop tick and describe it later with :func:`describe_refusal`.
+        """
         try:
-            return self.refusal(peer_credentials(sock))
+            peer = peer_credentials(sock)
         except OSError as err:
-            return f"its credentials cannot be read ({err})"
+            return err
+        return None if self.admits(peer) else peer
+
+
+def describe_refusal(policy: PeerPolicy, refused: PeerCredentials | OSError | None) -> str:
+    """Why a peer :meth:`PeerPolicy.screen` returned was refused; "" for None (admitted)."""
+    if refused is None:
+        return ""
+    if isinstance(refused, OSError):
+        return f"its credentials cannot be read ({refused})"
+    return policy.refusal(refused)

@@ -295,6 +295,33 @@ def test_a_hub_admits_only_the_expected_process(buses: list[SeqPacketBus]) -> No
     assert f"process {os.getpid()} " in hub.refused_peers[0] and "not the process this bus expects" in hub.refused_peers[0]
 
 
+def test_a_hub_refuses_inside_its_receive_path_without_a_name_lookup_or_a_log_line(
+    buses: list[SeqPacketBus], monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The hub screens a connection in ``send``/``recv`` (a loop tick): no NSS lookup, no log I/O there.
+
+    The refusal is described, with the user's name, and logged when ``refused_peers`` is first read.
+    """
+    import pwd
+
+    lookups: list[int] = []
+    real_getpwuid = pwd.getpwuid
+    monkeypatch.setattr(pwd, "getpwuid", lambda uid: lookups.append(uid) or real_getpwuid(uid))
+    channel = _name()
+    hub = SeqPacketBus(channel, peer_pids=[os.getpid() + 1])  # not this process
+    buses.append(hub)
+    node = SeqPacketBus(channel)
+    buses.append(node)
+    caplog.set_level("WARNING", logger="drivers.seqpacket.bus")
+    assert _serve(hub, 0.2) == []
+    assert hub.refused_count >= 1 and hub.peer_count == 0
+    assert lookups == [] and caplog.records == [], "the tick path looked a name up or logged"
+    notes = hub.refused_peers
+    assert len(notes) == min(hub.refused_count, 16) and "not the process this bus expects" in notes[0]
+    assert lookups and [r.getMessage() for r in caplog.records] == [f"seqpacket: {note}" for note in notes]
+    assert hub.refused_peers == notes and len(caplog.records) == len(notes), "each refusal is logged once"
+
+
 def test_a_node_refuses_a_hub_that_is_not_the_expected_process(buses: list[SeqPacketBus]) -> None:
     channel = _name()
     buses.append(SeqPacketBus(channel))  # sits on the channel first
