@@ -147,10 +147,21 @@ def _print_study(console: Console, result: Any) -> None:
     if controlled is not None and result.rig_effects:
         for line in tracking_lines(result.force_tracking()):
             console.print(f"  {line}", highlight=False)
-    if controlled is not None and controlled.extra.get("outcome") == "tripped":
-        console.print(f"[bold red]the controlled case tripped:[/] {escape(controlled.extra['trip_reason'])}")
+    ended = _early_end(controlled)
+    if ended:
+        console.print(f"{ended}: {escape(controlled.extra['trip_reason'])}")
     peaks = controlled.peaks if controlled is not None else None
     console.print(reduction_table(result.cases["passive"].peaks, peaks, title).to_rich(console.width))
+
+
+def _early_end(controlled: Any) -> str:
+    """``the controlled case tripped`` or ``... stopped early`` (a check's safe stop), marked up; "" if it completed."""
+    outcome = controlled.extra.get("outcome") if controlled is not None else None
+    if outcome == "tripped":
+        return "[bold red]the controlled case tripped[/]"
+    if outcome == "stopped":
+        return "[yellow]the controlled case stopped early[/]"
+    return ""
 
 
 def run_single(args: argparse.Namespace, console: Console, profile: Any) -> int:
@@ -170,8 +181,9 @@ def run_single(args: argparse.Namespace, console: Console, profile: Any) -> int:
     cost = sum(case.wall_time_s for case in result.cases.values())
     outcome = f"simulated {len(result.cases)} x {result.motion.duration_s:.1f} s in {cost:.2f} s of wall time"
     controlled = result.cases.get("controlled")
-    if controlled is not None and controlled.extra.get("outcome") == "tripped":
-        outcome += f"; [bold red]the controlled case tripped[/] ({escape(controlled.extra['trip_reason'])})"
+    ended = _early_end(controlled)
+    if ended:
+        outcome += f"; {ended} ({escape(controlled.extra['trip_reason'])})"  # type: ignore[union-attr]
     if args.json:
         outcome += f"; wrote {escape(write_json(args.json, result.to_json()))}"
     if args.out:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 from harness.errors import SafetyError
 from harness.loop.config import LoopConfig
+from harness.loop.ending import run_ending
 from harness.loop.operator import OperatorSignals
 from harness.loop.status import LoopStatus
 from harness.loop.tick import ControlTick
@@ -31,7 +32,6 @@ from harness.safety.supervisor import SupervisedCommand
 
 _FINAL = (State.DONE, State.TRIPPED)
 #: The outcome of a run that ended in each final state (any other: ``stopped``).
-_OUTCOME_OF: dict[State, Outcome] = {State.DONE: "completed", State.TRIPPED: "tripped"}
 #: Longest wait for the table controller's RIG_STATUS ``table_running`` after RIG_CONTROL start (s).
 TABLE_START_TIMEOUT_S = 2.0
 #: The safe stop's reason when the recorder cannot write (docs/SAFETY.md, "A lost record").
@@ -277,7 +277,6 @@ class ControlLoop:
         tick, health, trace = self.tick, self.tick.health, self.trace
         run_started = armed_at = None
         finished_at = None
-        outcome: Outcome = "error"
         self.signals.install()
         threads = [thread.name for thread in threading.enumerate()]  # what shares the interpreter with the loop
         try:
@@ -320,21 +319,17 @@ class ControlLoop:
             except BaseException as exc:  # KeyboardInterrupt, SystemExit: latch the trip, so the final command says TRIPPED
                 tick.supervisor.report_exception(t, exc)
                 raise  # the finally below sends zero force with the drive disabled first
-            state = tick.supervisor.state
-            outcome = _OUTCOME_OF.get(state, "stopped")
-            if outcome == "completed" and (self.signals.stop_requested or tick.supervisor.stop_reason):
-                outcome = "stopped"  # by the operator, or by a check's safe stop (its name is the reason)
+            ending = run_ending(tick.supervisor, self.signals.stop_requested)
         finally:
             tick.send_disable(self.scheduler.elapsed_s)
             self.signals.restore()
             restore_realtime(report)
             timing.overruns = self.scheduler.overruns
         supervisor = tick.supervisor
-        stopped_by_check = outcome == "stopped" and not supervisor.command.trip_reason
         return LoopResult(
-            outcome=outcome,
-            trip_reason=supervisor.stop_reason if stopped_by_check else supervisor.command.trip_reason,
-            trip_detail=supervisor.stop_detail if stopped_by_check else supervisor.trip_detail,
+            outcome=ending.outcome,
+            trip_reason=ending.reason,
+            trip_detail=ending.detail,
             timing={**timing.summary(), "threads": threads, "stalls_ridden_through": self.stalls,
                     "longest_stall_s": self.longest_stall_s, "stall_budget_s": self.max_stall_s,
                     "gaps_past_budget": self.gaps_past_budget,

@@ -27,6 +27,7 @@ from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import make_compensator, make_friction_estimator
 from harness.errors import ModelError
+from harness.loop.ending import run_ending
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
 from harness.rig.parts import RigParts
@@ -245,8 +246,8 @@ def _twin_result(
     columns = _measured_columns(times, samples)
     columns.update({name: true_columns[name] for name in layout.BEARING})
     columns.update(samples.columns(layout.TWIN_CONTROL))
-    extra = {"outcome": "tripped" if supervisor.state is State.TRIPPED else "completed",
-             "trip_reason": supervisor.command.trip_reason,
+    ending = run_ending(supervisor, record_ended=True)  # as a dry run's: a check's safe stop is "stopped", with the check's name
+    extra = {"outcome": ending.outcome, "trip_reason": ending.reason,
              "true_peaks": peak_responses(true_columns, total_weight_N)}
     return case_result("rig twin", columns, total_weight_N, plant.steps + rig.substeps, started_s, extra)
 

@@ -56,3 +56,12 @@ def test_the_shipped_rig_is_not_flagged_in_the_same_run(tmp_path, capsys) -> Non
     assert status == exit_codes.OK, capsys.readouterr().out
     run = load_run(folder)
     assert not any(e["name"] == "force_oscillation" for e in run.events)
+
+
+def test_the_twin_of_the_limit_cycling_rig_says_stopped_with_the_check_as_the_dry_run_does(capsys) -> None:
+    """A check's safe stop on ``simulate --rig-effects`` is "stopped", with the check's name (it said "completed")."""
+    status = main(["simulate", "--rig-effects", "--duration", "6", *LIMIT_CYCLING])
+    out = " ".join(capsys.readouterr().out.split())
+    assert status == exit_codes.OK, out
+    assert "the controlled case stopped early: force_oscillation" in out, out
+    assert "the controlled case tripped" not in out
