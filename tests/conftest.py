@@ -6,9 +6,16 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from drivers.seqpacket.bus import SeqPacketBus
 from tests import realtime_runs
+
+# No hypothesis deadline: how long an example takes is not what these tests judge (speed targets are in benchmarks/),
+# and the first example of a compiled kernel pays its load from numba's cache: 2.46 s against the default 200 ms
+# deadline in a fresh pytest-xdist worker on a loaded machine (test_frame_kernel's CRC test, issue 32 item 5).
+settings.register_profile("suite", deadline=None)
+settings.load_profile("suite")
 
 REPO = Path(__file__).resolve().parent.parent
 PROFILES = REPO / "profiles"
@@ -24,6 +31,17 @@ def edited_dbc(folder: Path, source: Path, *replacements: tuple[str, str], name:
     path = folder / name
     path.write_text(text, encoding="cp1252")
     return path
+
+
+@pytest.fixture(autouse=True)
+def _captured_width(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every test starts without ``$COLUMNS``, as a command whose output is captured (a log file, a pipe) runs.
+
+    The commands print at ``$COLUMNS`` where it is set, else unwrapped when captured (harness/commands/output.py),
+    and the tests read their one-line outputs so. A pytest-xdist worker starts with ``COLUMNS=80`` in its
+    environment, which wrapped them there; a test that wants a width sets it itself.
+    """
+    monkeypatch.delenv("COLUMNS", raising=False)
 
 
 @pytest.fixture(scope="session")
