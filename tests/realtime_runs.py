@@ -200,6 +200,6 @@ def summary_line(records: list[dict]) -> str:
     refused = sum(len(r["refusals"]) for r in records)
     waited = sum(r["waited_s"] for r in records)
     never = sum(r["never_quiet"] for r in records)
-    return (f"real-time runs: {len(records)} tests, {runs} runs, {refused} refused by the pre-flight "
+    return (f"real-time runs: {len(records)} asked for, {runs} started, {refused} refused by the pre-flight "
             f"(run again, up to {MAX_RUNS} runs a test), "
             f"{waited:.0f} s spent waiting for a quiet second ({never} runs started without one)")

@@ -152,5 +152,5 @@ def test_the_summary_line_adds_up_every_tests_runs():
     records = [{"what": "a", "runs": 1, "refusals": [], "waited_s": 1.0, "never_quiet": 0},
                {"what": "b", "runs": 3, "refusals": ["x", "y"], "waited_s": 40.0, "never_quiet": 1}]
     line = summary_line(records)
-    assert line.startswith("real-time runs: 2 tests, 4 runs, 2 refused by the pre-flight")
+    assert line.startswith("real-time runs: 2 asked for, 4 started, 2 refused by the pre-flight")
     assert "41 s spent waiting for a quiet second (1 runs started without one)" in line
