@@ -6,8 +6,16 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from drivers.seqpacket.bus import SeqPacketBus
+from tests import realtime_runs
+
+# No hypothesis deadline: how long an example takes is not what these tests judge (speed targets are in benchmarks/),
+# and the first example of a compiled kernel pays its load from numba's cache: 2.46 s against the default 200 ms
+# deadline in a fresh pytest-xdist worker on a loaded machine (test_frame_kernel's CRC test, issue 32 item 5).
+settings.register_profile("suite", deadline=None)
+settings.load_profile("suite")
 
 REPO = Path(__file__).resolve().parent.parent
 PROFILES = REPO / "profiles"
@@ -23,6 +31,17 @@ def edited_dbc(folder: Path, source: Path, *replacements: tuple[str, str], name:
     path = folder / name
     path.write_text(text, encoding="cp1252")
     return path
+
+
+@pytest.fixture(autouse=True)
+def _captured_width(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every test starts without ``$COLUMNS``, as a command whose output is captured (a log file, a pipe) runs.
+
+    The commands print at ``$COLUMNS`` where it is set, else unwrapped when captured (harness/commands/output.py),
+    and the tests read their one-line outputs so. A pytest-xdist worker starts with ``COLUMNS=80`` in its
+    environment, which wrapped them there; a test that wants a width sets it itself.
+    """
+    monkeypatch.delenv("COLUMNS", raising=False)
 
 
 @pytest.fixture(scope="session")
@@ -56,3 +75,40 @@ def buses() -> Iterator[list[SeqPacketBus]]:
     yield opened
     for bus in opened:
         bus.shutdown()
+
+
+# ------------------------------------------------------------ real-time runs: counted, reported (tests/realtime_runs.py)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo):
+    """Attach the real-time runs a test (or its module's fixture) made to its report, before the report is made.
+
+    The report carries them from an xdist worker to the stage's summary, and into the JUnit XML as properties.
+    """
+    while realtime_runs.RECORDS:
+        item.user_properties.append((realtime_runs.PROPERTY, realtime_runs.RECORDS.pop(0).as_dict()))
+    yield
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config) -> None:
+    """One line at the end of the stage: the real-time runs, the pre-flight's refusals and the waits for a quiet second."""
+    latest: dict[str, list] = {}  # a test's last report holds every record of its earlier phases too
+    for reports in terminalreporter.stats.values():
+        for report in reports:
+            properties = [value for name, value in getattr(report, "user_properties", ()) if name == realtime_runs.PROPERTY]
+            if properties and len(properties) >= len(latest.get(report.nodeid, [])):
+                latest[report.nodeid] = properties
+    if not latest:
+        return
+    records = [record for properties in latest.values() for record in properties]
+    terminalreporter.write_sep("-", "real-time runs")
+    for nodeid, properties in sorted(latest.items()):
+        for record in properties:
+            if record["refusals"] or record["never_quiet"]:
+                terminalreporter.write_line(
+                    f"{nodeid}: {record['what']}: {record['runs']} runs, {len(record['refusals'])} refused "
+                    f"by the pre-flight, {record['waited_s']:.0f} s waiting for a quiet second")
+                for figures in record["refusals"]:
+                    terminalreporter.write_line(f"    refused: {figures}")
+    terminalreporter.write_line(realtime_runs.summary_line(records))

@@ -101,6 +101,7 @@ def test_a_disk_already_full_is_refused_before_the_rig_starts(tmpfs, monkeypatch
     assert started == [], "the rig process was never started"
 
 
+@pytest.mark.slow
 def test_a_disk_filling_mid_run_stops_the_run_safely_marks_it_and_exits_3(tmpfs) -> None:
     log_dir = tmpfs("16m")
     process = _dry_run_process(log_dir, "8")

@@ -130,6 +130,7 @@ def test_a_simulated_case_with_its_unsampled_last_row_gives_no_nan_warning(tmp_p
     assert not load_run(tmp_path / "sim" / "controlled").warnings
 
 
+@pytest.mark.slow
 def test_an_actuator_identification_fits_this_runs_responses_only(tmp_path, capsys):
     """Item 5: a blocked response of an earlier run in DIR was fitted with this run's, its error reported as current."""
     out = tmp_path / "frf"

@@ -26,6 +26,7 @@ def _run_folders(folder: Path) -> list[Path]:
     return sorted(p for p in folder.iterdir() if p.is_dir() and (p / "metadata.json").is_file())
 
 
+@pytest.mark.slow
 def test_identify_actuator_measures_the_first_order_actuator_in_both_conditions(tmp_path, capsys):
     out = tmp_path / "frf"
     status = main(["identify", "actuator", "--out", str(out), "--both", "--variant", "force_source", *SHORT])
@@ -162,6 +163,7 @@ def test_rows_of_skipped_ticks_are_filled_in_on_the_tick_grid():
     np.testing.assert_array_equal(on_tick_grid(every, np.sin(every), 500.0), np.sin(every))
 
 
+@pytest.mark.slow
 def test_the_fit_recovers_an_actuator_whose_truth_is_hidden_from_the_harness(tmp_path, capsys):
     """The virtual rig's actuator has a bulk modulus 30 % above and a valve 30 % slower than the profile
     believes (rig.truth.actuator); the harness measures both conditions on the CAN path, in lockstep, with
@@ -206,6 +208,7 @@ def test_the_fit_recovers_an_actuator_whose_truth_is_hidden_from_the_harness(tmp
         assert np.max(np.abs(np.degrees(np.angle(ratio)))) <= 5.0
 
 
+@pytest.mark.slow
 def test_identify_reports_the_effective_velocity_feedback_of_a_rig_whose_feedforward_is_hidden(tmp_path, capsys):
     """The profile believes full feed-forward (alpha = 1, c_eff = 0); the rig's servo controller is set
     to half of it and its oil is 30 % stiffer (rig.truth.actuator): c_eff = 0.5 x 1.3 x 94 = 61 kN s/m.

@@ -59,6 +59,7 @@ def test_a_bad_band_is_refused_by_the_option_parser(tmp_path, capsys):
     assert "LOW < HIGH" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_run_whose_base_mat_never_moved_determines_nothing_and_is_refused(tmp_path, capsys):
     from harness.model.plant import TableMotion
 

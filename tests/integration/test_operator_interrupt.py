@@ -24,6 +24,8 @@ import threading
 import time
 from pathlib import Path
 
+import pytest
+
 from harness import exit_codes
 from tests.conftest import REPO
 
@@ -82,6 +84,7 @@ class _OutcomeWatch:
         return "".join(self._lines), err
 
 
+@pytest.mark.slow
 def test_a_stop_at_any_moment_from_start_to_exit_ends_safely_with_an_outcome_line(tmp_path: Path) -> None:
     whole_s = _whole_run_s(tmp_path / "whole")
     first_s = _handlers_installed_after_s()

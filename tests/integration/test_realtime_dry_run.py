@@ -4,7 +4,9 @@ No lockstep and no fake clock: the loop runs against the wall clock at the profi
 500 Hz, the virtual rig in its own process on the default private bus, on whatever
 machine runs the suite (a noisy 2-core VM in CI). It must complete. A trip here is a
 real failure of the soft-real-time design, not noise: the stall budget, the poll-first
-ages and the rig's own process exist so that this run completes on such machines.
+ages and the rig's own process exist so that this run completes on such machines. A run the
+pre-flight refuses (before anything moved) is run again after a quiet second
+(tests/realtime_runs.py), counted and reported; marked ``realtime``, it runs in the serial pass.
 """
 
 from __future__ import annotations
@@ -19,10 +21,17 @@ import numpy as np
 import pytest
 
 from harness import exit_codes
+from harness.profile import load_profile
 from harness.recording import load_run
 from harness.safety.lifecycle import State
+from tests.realtime_runs import run_real_time
+
+pytestmark = pytest.mark.realtime
 
 DURATION_S = 10.0
+#: The shipped profile's loop rate and stall budget: the quiet second is judged at them.
+PROFILE_RATE_HZ = load_profile(None).control.rate_hz
+STALL_BUDGET_S = load_profile(None).safety.run.max_stall_s
 
 
 def _harness(*args: str, timeout_s: float = 300.0) -> subprocess.CompletedProcess:
@@ -32,9 +41,14 @@ def _harness(*args: str, timeout_s: float = 300.0) -> subprocess.CompletedProces
     )
 
 
-def quiet_dry_run(log_dir: Path, *args: str) -> tuple[subprocess.CompletedProcess, Path]:
-    """A quiet real-time ``harness dry-run`` of DURATION_S into ``log_dir``: its process and its run folder."""
-    done = _harness("dry-run", *args, "--duration", str(DURATION_S), "--quiet", "--log-dir", str(log_dir))
+def quiet_dry_run(log_dir: Path, *args: str, rate_hz: float = PROFILE_RATE_HZ) -> tuple[subprocess.CompletedProcess, Path]:
+    """A quiet real-time ``harness dry-run`` of DURATION_S into ``log_dir``: its process and its run folder.
+
+    Through :func:`~tests.realtime_runs.run_real_time`: the run the pre-flight let through.
+    """
+    command = ("dry-run", *args, "--duration", str(DURATION_S), "--quiet", "--log-dir", str(log_dir))
+    done = run_real_time(lambda: _harness(*command), log_dir=log_dir, rate_hz=rate_hz, stall_budget_s=STALL_BUDGET_S,
+                         what=f"harness {' '.join(command[:-2])}")
     folders = sorted(p for p in log_dir.iterdir() if p.is_dir())
     assert folders, done.stdout + done.stderr
     return done, folders[-1]

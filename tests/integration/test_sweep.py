@@ -297,6 +297,7 @@ def large_local(tmp_path_factory) -> tuple[Path, Path]:
     return study, folder
 
 
+@pytest.mark.slow
 def test_192_cases_on_local_workers_with_the_report(large_local):
     _, folder = large_local
     rows = _rows(folder / "local")
@@ -312,6 +313,7 @@ def test_192_cases_on_local_workers_with_the_report(large_local):
     assert "| FSF-I | all | 96 | 0 |" in summary
 
 
+@pytest.mark.slow
 def test_the_same_sweep_through_a_dask_local_cluster_gives_the_same_rows(large_local, capsys):
     pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install '.[cluster]')")
     study, folder = large_local

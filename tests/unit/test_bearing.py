@@ -49,6 +49,7 @@ def _reference_nu(nu0: float, velocity: float, dt: float, params: np.ndarray) ->
     return float(solution.y[0, -1])
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(
     nu0=st.floats(-1.0, 1.0),

@@ -1,0 +1,205 @@
+"""One way for every real-time test to start its run: wait for a quiet second, retry a run the pre-flight refused.
+
+A real-time dry run measures the host before it arms (harness/loop/preflight.py): one second of the
+loop's scheduler running empty, the rig's frames watched. A second in which this host would have
+tripped refuses the run, exit status 2, before anything moved, with ``this host cannot run the loop
+within its stall budget`` and the figures. That refusal is the pre-flight doing its job on a busy
+machine (a CI runner where another job just woke up), not a failure of the path under test, so a
+real-time test may run again after it. The pre-flight's bounds are never loosened here: the test
+waits, then asks again.
+
+:func:`run_real_time`, for each run:
+
+1. waits, at most :data:`QUIET_WAIT_S`, for a quiet second: the pre-flight's own measurement
+   (:func:`~harness.loop.preflight.measure_host_timing`, without the rig) at the run's rate and
+   stall budget, with the scheduling the run's loop takes (the shipped ``fifo_priority: auto``:
+   SCHED_FIFO where permitted, and the machine's idle CPU judged where not, as the pre-flight
+   does), gives ``ok``, the verdict with margin. A host that never gets quiet within that time
+   still runs: the pre-flight of the run judges it;
+2. runs the test's command; a run refused by the pre-flight moves its run folder aside (into
+   ``<log_dir>-refused``, so the test sees only the run that went on) and is run again, up to
+   :data:`MAX_RUNS` runs in all;
+3. returns the first run the pre-flight let through, whatever its outcome: a trip or any other
+   failure is the test's to judge, never retried;
+4. fails the test with every refusal's figures when all :data:`MAX_RUNS` were refused: this host is
+   too noisy to run the test at all, and says so.
+
+Every call is counted (:data:`RECORDS`): tests/conftest.py attaches the counts to the test's report
+and prints one summary line at the end of the stage, so retries are seen even where every test passed.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+from harness import exit_codes
+from harness.loop.preflight import HostTiming, measure_host_timing
+from harness.realtime.host import AUTO, Scheduling, request_fifo, restore_scheduling
+
+#: Runs of one test at most: the first and the retries of runs the pre-flight refused.
+MAX_RUNS = 5
+#: Longest wait for a quiet second before each run (s); then the run starts anyway.
+QUIET_WAIT_S = 30.0
+#: The words of the pre-flight's refusal (HostTiming.check); tests/unit/test_realtime_runs.py holds them to it.
+REFUSAL = "this host cannot run the loop within its stall budget"
+#: The pre-flight's figures in a refusal: from "host timing at" to the verdict.
+FIGURES = re.compile(r"host timing at .*?: refused")
+#: The name of the counts in a test report's user_properties.
+PROPERTY = "real_time_runs"
+
+
+@dataclass
+class RealTimeRecord:
+    """What :func:`run_real_time` did for one test: runs, refusals with their figures, seconds waited."""
+
+    what: str
+    runs: int = 0
+    refusals: list[str] = field(default_factory=list)
+    waited_s: float = 0.0
+    never_quiet: int = 0
+
+    def as_dict(self) -> dict:
+        """Plain data for a test report's user_properties (crosses from an xdist worker)."""
+        return {"what": self.what, "runs": self.runs, "refusals": list(self.refusals), "waited_s": self.waited_s,
+                "never_quiet": self.never_quiet}
+
+
+#: Records made since conftest last collected them (it drains them into the running test's report).
+RECORDS: list[RealTimeRecord] = []
+
+
+@dataclass(frozen=True)
+class QuietWait:
+    """The outcome of :func:`wait_for_quiet_second`."""
+
+    quiet: bool
+    waited_s: float
+    last: HostTiming
+
+
+def _as_the_loop() -> Scheduling:
+    """The scheduling the run's loop takes with the shipped ``loop.realtime.fifo_priority: auto``."""
+    return request_fifo(AUTO, what="the quiet-second check")
+
+
+def wait_for_quiet_second(
+    rate_hz: float, stall_budget_s: float, limit_s: float = QUIET_WAIT_S,
+    measure: Callable[..., HostTiming] = measure_host_timing, clock: Callable[[], float] = time.monotonic,
+    scheduling: Callable[[], Scheduling] = _as_the_loop,
+) -> QuietWait:
+    """Measure one second at a time until the pre-flight's measurement says ``ok``, for at most ``limit_s``.
+
+    Parameters
+    ----------
+    rate_hz : float
+        The run's loop rate (Hz).
+    stall_budget_s : float
+        The run's stall budget (s), ``safety.run.max_stall_s``.
+    limit_s : float
+        Longest wait (s); the last measurement is returned with ``quiet`` False after it.
+    measure, clock : callable
+        :func:`~harness.loop.preflight.measure_host_timing` and the wall clock, injectable for tests.
+    scheduling : callable
+        Takes the loop's scheduling for the measuring thread (given back after each second); the idle CPU
+        is judged where it got no real-time priority, as the pre-flight judges it.
+    """
+    started = clock()
+    while True:
+        taken = scheduling()
+        try:
+            timing = measure(rate_hz, stall_budget_s, 0.0, duration_s=1.0, judge_idle=not taken.granted)
+        finally:
+            restore_scheduling(taken)
+        waited_s = clock() - started
+        if timing.verdict == "ok" or waited_s >= limit_s:
+            return QuietWait(timing.verdict == "ok", waited_s, timing)
+
+
+def refused_by_preflight(done: subprocess.CompletedProcess) -> bool:
+    """True when ``done`` is a run the pre-flight refused: exit status 2 with the refusal's words."""
+    return done.returncode == exit_codes.INPUT_ERROR and REFUSAL in _output(done)
+
+
+def _output(done: subprocess.CompletedProcess) -> str:
+    return f"{done.stdout or ''}{done.stderr or ''}"
+
+
+def _set_aside(log_dir: Path, before: set[Path]) -> None:
+    """Move the run folders a refused run made in ``log_dir`` into ``<log_dir>-refused``."""
+    if not log_dir.is_dir():
+        return
+    aside = log_dir.with_name(log_dir.name + "-refused")
+    for folder in sorted(set(log_dir.iterdir()) - before):
+        aside.mkdir(exist_ok=True)
+        shutil.move(folder, aside / folder.name)
+
+
+def run_real_time(
+    attempt: Callable[[], subprocess.CompletedProcess], *, log_dir: Path, rate_hz: float, stall_budget_s: float,
+    what: str, wait: Callable[[float, float], QuietWait] = wait_for_quiet_second, records: list[RealTimeRecord] = RECORDS,
+) -> subprocess.CompletedProcess:
+    """Run ``attempt`` after a quiet second; run it again while the pre-flight refuses it (module docstring).
+
+    Parameters
+    ----------
+    attempt : callable
+        Starts the real-time run and returns its finished process (text output).
+    log_dir : Path
+        The run's ``--log-dir``: a refused run's folder is moved out of it.
+    rate_hz, stall_budget_s : float
+        The run's loop rate (Hz) and stall budget (s), for the quiet second.
+    what : str
+        The run, for the report.
+    wait : callable
+        :func:`wait_for_quiet_second`, injectable for tests.
+    records : list
+        Where the run's :class:`RealTimeRecord` goes: :data:`RECORDS`, or a test's own list.
+
+    Returns
+    -------
+    subprocess.CompletedProcess
+        The first run the pre-flight did not refuse.
+    """
+    record = RealTimeRecord(what)
+    records.append(record)
+    while True:
+        quiet = wait(rate_hz, stall_budget_s)
+        record.waited_s += quiet.waited_s
+        record.never_quiet += not quiet.quiet
+        before = set(log_dir.iterdir()) if log_dir.is_dir() else set()
+        done = attempt()
+        record.runs += 1
+        if not refused_by_preflight(done):
+            print(f"{what}: run {record.runs} went past the pre-flight ({len(record.refusals)} refused before it)")
+            return done
+        figures = FIGURES.search(_output(done))
+        record.refusals.append(figures.group(0) if figures else _output(done)[-500:])
+        print(f"{what}: run {record.runs} refused by the pre-flight: {record.refusals[-1]}")
+        _set_aside(log_dir, before)
+        if record.runs >= MAX_RUNS:
+            pytest.fail(
+                f"{what}: the pre-flight refused all {record.runs} runs, so this host was never quiet enough to run "
+                f"this real-time test ({record.waited_s:.0f} s spent waiting for a quiet second, none found before "
+                f"{record.never_quiet} of the runs; last quiet check: {quiet.last.summary()}). The pre-flight's "
+                "figures of each run:\n  " + "\n  ".join(record.refusals),
+                pytrace=False,
+            )
+
+
+def summary_line(records: list[dict]) -> str:
+    """The stage's one line on its real-time runs (from :meth:`RealTimeRecord.as_dict` of each test)."""
+    runs = sum(r["runs"] for r in records)
+    refused = sum(len(r["refusals"]) for r in records)
+    waited = sum(r["waited_s"] for r in records)
+    never = sum(r["never_quiet"] for r in records)
+    return (f"real-time runs: {len(records)} asked for, {runs} started, {refused} refused by the pre-flight "
+            f"(run again, up to {MAX_RUNS} runs a test), "
+            f"{waited:.0f} s spent waiting for a quiet second ({never} runs started without one)")

@@ -1,0 +1,156 @@
+"""The real-time tests' shared runner (tests/realtime_runs.py): a refused run is run again, counted, and fails clearly.
+
+No run and no wall clock here: the attempts are made-up finished processes and the quiet second is injected.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from harness import exit_codes
+from harness.loop.preflight import MIN_IDLE_CORES, HostTiming, HostTimingRefused
+from harness.realtime.host import Scheduling
+from tests import realtime_runs
+from tests.realtime_runs import QuietWait, refused_by_preflight, run_real_time, summary_line, wait_for_quiet_second
+
+RATE_HZ, BUDGET_S = 500.0, 0.02
+
+
+def _timing(max_s: float, idle: float | None = 1.5) -> HostTiming:
+    return HostTiming(RATE_HZ, 500, 1e-5, 1e-4, max_s, BUDGET_S, idle_cores=idle)
+
+
+def _refusal_text() -> str:
+    """What the harness prints when its pre-flight refuses: the message of HostTiming.check, as the CLI shows it."""
+    with pytest.raises(HostTimingRefused) as refused:
+        _timing(0.074).check()
+    return f"error: {refused.value}\n"
+
+
+def _done(status: int, err: str = "", out: str = "") -> subprocess.CompletedProcess:
+    return subprocess.CompletedProcess(["harness"], status, out, err)
+
+
+def _quiet(_rate_hz: float, _budget_s: float) -> QuietWait:
+    return QuietWait(True, 1.0, _timing(0.001))
+
+
+class Attempts:
+    """Finished processes handed out in order; each makes a run folder in ``log_dir`` as a real run does."""
+
+    def __init__(self, log_dir: Path, *done: subprocess.CompletedProcess) -> None:
+        self.log_dir, self.done, self.made = log_dir, list(done), 0
+
+    def __call__(self) -> subprocess.CompletedProcess:
+        self.made += 1
+        (self.log_dir / f"run{self.made}").mkdir(parents=True)
+        return self.done.pop(0)
+
+
+def test_the_refusal_words_are_the_preflights_own():
+    text = _refusal_text()
+    assert realtime_runs.REFUSAL in text
+    assert refused_by_preflight(_done(exit_codes.INPUT_ERROR, err=text))
+    assert realtime_runs.FIGURES.search(text).group(0).startswith("host timing at 500 Hz")
+
+
+@pytest.mark.parametrize(("status", "err"), [
+    (exit_codes.INPUT_ERROR, "error: --rate: found 10 Hz, expected at least 100 Hz"),  # another refusal: the test's to judge
+    (exit_codes.TRIPPED, "outcome: tripped (loop_stall)"),
+    (exit_codes.OK, ""),
+])
+def test_only_the_preflights_refusal_counts_as_refused(status, err):
+    assert not refused_by_preflight(_done(status, err=err))
+
+
+def test_a_refused_run_is_run_again_and_its_folder_set_aside(tmp_path, capsys):
+    records: list[realtime_runs.RealTimeRecord] = []  # made-up runs: kept out of the stage's summary
+    log_dir = tmp_path / "logs"
+    attempts = Attempts(log_dir, _done(exit_codes.INPUT_ERROR, err=_refusal_text()), _done(exit_codes.OK, out="completed"))
+    done = run_real_time(attempts, log_dir=log_dir, rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run", wait=_quiet,
+                         records=records)
+    assert done.stdout == "completed"
+    assert [p.name for p in log_dir.iterdir()] == ["run2"]  # the test sees only the run that went on
+    assert [p.name for p in (tmp_path / "logs-refused").iterdir()] == ["run1"]
+    record = records[-1]
+    assert (record.runs, len(record.refusals), record.waited_s) == (2, 1, 2.0)
+    assert "lateness" in record.refusals[0] and "74.00 ms" in record.refusals[0]
+    assert "run 1 refused by the pre-flight" in capsys.readouterr().out
+
+
+def test_a_run_that_fails_past_the_preflight_is_never_run_again(tmp_path):
+    records: list[realtime_runs.RealTimeRecord] = []  # made-up runs: kept out of the stage's summary
+    attempts = Attempts(tmp_path, _done(exit_codes.TRIPPED, out="tripped (loop_stall)"), _done(exit_codes.OK))
+    done = run_real_time(attempts, log_dir=tmp_path, rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run", wait=_quiet,
+                         records=records)
+    assert done.returncode == exit_codes.TRIPPED and attempts.made == 1
+    assert records[-1].refusals == []
+
+
+def test_a_host_never_quiet_enough_fails_with_every_refusals_figures(tmp_path):
+    records: list[realtime_runs.RealTimeRecord] = []  # made-up runs: kept out of the stage's summary
+    refusals = [_done(exit_codes.INPUT_ERROR, err=_refusal_text()) for _ in range(realtime_runs.MAX_RUNS + 1)]
+    attempts = Attempts(tmp_path, *refusals)
+    with pytest.raises(pytest.fail.Exception) as failed:
+        run_real_time(attempts, log_dir=tmp_path, rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run", wait=_quiet,
+                      records=records)
+    message = str(failed.value)
+    assert attempts.made == realtime_runs.MAX_RUNS
+    assert f"refused all {realtime_runs.MAX_RUNS} runs" in message and "never quiet enough" in message
+    assert message.count("max 74.00 ms against a stall budget of 20.0 ms") == realtime_runs.MAX_RUNS
+
+
+def _normal() -> Scheduling:
+    return Scheduling("auto", 80, False)  # not permitted: normal scheduling, the idle CPU judged
+
+
+def test_the_quiet_second_is_the_first_the_preflights_measurement_calls_ok():
+    seconds = iter([_timing(0.015), _timing(0.001, idle=MIN_IDLE_CORES / 2), _timing(0.001)])  # marginal, busy, quiet
+    judged: list[bool] = []
+
+    def measure(*_args, judge_idle: bool, **_kwargs) -> HostTiming:
+        judged.append(judge_idle)
+        return next(seconds)
+
+    clock = iter(range(100))
+    wait = wait_for_quiet_second(RATE_HZ, BUDGET_S, 30.0, measure=measure, clock=lambda: next(clock), scheduling=_normal)
+    assert wait.quiet and wait.last.verdict == "ok" and wait.waited_s == 3
+    assert judged == [True] * 3  # without real-time priority the machine's idle CPU counts, as in the pre-flight
+
+
+def test_with_real_time_priority_the_quiet_second_does_not_judge_the_idle_cpu():
+    judged: list[bool] = []
+
+    def measure(*_args, judge_idle: bool, **_kwargs) -> HostTiming:
+        judged.append(judge_idle)
+        return _timing(0.001, idle=None)
+
+    clock = iter(range(100))
+    taken: list[Scheduling] = []
+
+    def fifo() -> Scheduling:  # as granted; restore_scheduling gives back normal scheduling, which this process has
+        taken.append(Scheduling("auto", 80, granted=True, previous=(os.SCHED_OTHER, 0)))
+        return taken[-1]
+
+    wait = wait_for_quiet_second(RATE_HZ, BUDGET_S, 30.0, measure=measure, clock=lambda: next(clock), scheduling=fifo)
+    assert wait.quiet and judged == [False]
+    assert not taken[0].granted  # given back after the second
+
+
+def test_the_wait_for_a_quiet_second_gives_up_after_its_limit_and_the_run_starts_anyway():
+    clock = iter(range(0, 1000, 10))
+    wait = wait_for_quiet_second(RATE_HZ, BUDGET_S, 30.0, measure=lambda *a, **k: _timing(0.015), clock=lambda: next(clock),
+                                 scheduling=_normal)
+    assert not wait.quiet and wait.waited_s == 30 and wait.last.verdict == "marginal"
+
+
+def test_the_summary_line_adds_up_every_tests_runs():
+    records = [{"what": "a", "runs": 1, "refusals": [], "waited_s": 1.0, "never_quiet": 0},
+               {"what": "b", "runs": 3, "refusals": ["x", "y"], "waited_s": 40.0, "never_quiet": 1}]
+    line = summary_line(records)
+    assert line.startswith("real-time runs: 2 asked for, 4 started, 2 refused by the pre-flight")
+    assert "41 s spent waiting for a quiet second (1 runs started without one)" in line
