@@ -20,6 +20,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from harness.commands.options import STDOUT
+from harness.signals.timing_counts import TimingCounts, stall_words
 
 #: Width of a command's output when it is not a terminal (characters): no line is wrapped or cut, and
 #: tables keep every column in one block. ``$COLUMNS`` still sets it when given.
@@ -115,13 +116,13 @@ def print_timing(console: Console, timing: dict, rate_hz: float) -> None:
         f"loop at {rate_hz:g} Hz: {timing['ticks']} ticks, lateness median {timing['lateness_median_s'] * 1e6:.1f} us, "
         f"p99 {timing['lateness_p99_s'] * 1e6:.1f} us, max {timing['lateness_max_s'] * 1e6:.0f} us; compute median "
         f"{timing['compute_median_s'] * 1e6:.1f} us, p99 {timing['compute_p99_s'] * 1e6:.1f} us (CPU of the loop thread: median "
-        f"{timing['cpu_median_s'] * 1e6:.1f} us); deadlines skipped {timing['overruns']}"
+        f"{timing['cpu_median_s'] * 1e6:.1f} us)"
     )
     if "stall_budget_s" in timing and not timing.get("lockstep", False):
+        counts = TimingCounts(timing["missed_periods"], timing["stalls"])
         console.print(
-            f"stalls ridden through {timing['stalls_ridden_through']}, past the budget {timing.get('gaps_past_budget', 0)} "
-            f"(each a stall_past_budget event), longest gap between ticks {timing['longest_stall_s'] * 1e3:.1f} ms "
-            f"(stall budget {timing['stall_budget_s'] * 1e3:.1f} ms)"
+            f"loop stalls: {stall_words(counts, timing.get('gaps_past_budget', 0), timing['longest_stall_s'])} "
+            f"(stall budget {timing['stall_budget_s'] * 1e3:.1f} ms; each past it a stall_past_budget event)"
         )
 
 
