@@ -103,8 +103,9 @@ def table_check(summary: Mapping[str, Any] | None) -> TableCheck:
 def _reversed(summary: Mapping[str, Any]) -> bool:
     """True when a mismatch's measures say the table played the record against its sign."""
     correlation, ratio = summary.get("correlation"), summary.get("amplitude_ratio")
-    numbers = isinstance(correlation, (int, float)) and isinstance(ratio, (int, float))
-    return numbers and correlation <= -REVERSED_CORRELATION and ratio < 0.0
+    if not (isinstance(correlation, (int, float)) and isinstance(ratio, (int, float))):
+        return False
+    return correlation <= -REVERSED_CORRELATION and ratio < 0.0
 
 
 def run_table_check(metadata: Mapping[str, Any]) -> TableCheck:
