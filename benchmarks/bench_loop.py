@@ -4,7 +4,7 @@ For each rate (250, 500, 1000 Hz) it runs, in one session:
 
 1. a real-time dry run of the default profile (virtual rig in-process on python-can's
    virtual bus, synthetic record) for --duration seconds, and reads the loop's own
-   per-tick wake-up lateness and compute time, the overruns, and the frames lost
+   per-tick wake-up lateness and compute time, the missed periods, and the frames lost
    (counter gaps seen by the harness's decoder);
 2. ``cyclictest`` (Debian's rt-tests) at the same interval and for the same time, at
    normal priority (as the loop runs by default), and at SCHED_FIFO 80 where the
@@ -110,7 +110,7 @@ def loop_run(rate_hz: float, duration_s: float, log_dir: Path) -> dict:
         "compute_p99_us": timing["compute_p99_s"] * 1e6,
         "cpu_median_us": timing["cpu_median_s"] * 1e6,
         "cpu_p99_us": timing["cpu_p99_s"] * 1e6,
-        "overruns": timing["overruns"],
+        "missed_periods": timing["missed_periods"],
         "frames_received": result.session.bus["frames_received"],
         "frames_lost": result.session.bus["frames_lost"],
     }
@@ -139,7 +139,7 @@ def main() -> int:
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps({"duration_s": args.duration, "rows": rows}, indent=2) + "\n")
     print("\n| rate | loop lateness median / p99 / p99.9 / max (us) | compute median / p99 (us) "
-          "| loop-thread CPU median / p99 (us) | overruns | frames lost / received "
+          "| loop-thread CPU median / p99 (us) | missed periods | frames lost / received "
           "| cyclictest normal median / p99 / max (us) | cyclictest FIFO 80 median / p99 / max (us) "
           "| loop p99 / cyclictest p99 |")
     print("|---|---|---|---|---|---|---|---|---|")
@@ -149,7 +149,7 @@ def main() -> int:
         print(f"| {row['rate_hz']:.0f} Hz | {lp['lateness_median_us']:.1f} / {lp['lateness_p99_us']:.1f} / "
               f"{lp['lateness_p999_us']:.0f} / {lp['lateness_max_us']:.0f} | "
               f"{lp['compute_median_us']:.1f} / {lp['compute_p99_us']:.1f} | "
-              f"{lp['cpu_median_us']:.1f} / {lp['cpu_p99_us']:.1f} | {lp['overruns']} | "
+              f"{lp['cpu_median_us']:.1f} / {lp['cpu_p99_us']:.1f} | {lp['missed_periods']} | "
               f"{lp['frames_lost']} / {lp['frames_received']} | "
               f"{cn.get('median_us', float('nan')):.0f} / {cn.get('p99_us', float('nan')):.0f} / "
               f"{cn.get('max_us', float('nan')):.0f} | "

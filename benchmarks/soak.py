@@ -4,7 +4,7 @@ Runs the default profile (virtual rig in-process on the virtual bus, sensor nois
 quantization and delays, first-order actuator) on a long synthetic record, samples the
 process's resident memory every 10 s from a background thread, and reports: the outcome
 (the requirement: no trip), the resident-memory growth after a 30 s warm-up (the
-requirement: under 5 MB), loop timing, overruns and frames lost.
+requirement: under 5 MB), loop timing, missed periods and frames lost.
 
 Usage: python benchmarks/soak.py [--minutes 10] [--pga 0.25] [--json PATH]
 """
@@ -72,7 +72,7 @@ def main() -> int:
         "rss_max_mib": max(after) / 1024 if after else None,
         "rss_growth_mib": growth_mib,
         "ticks": timing.get("ticks"),
-        "overruns": timing.get("overruns"),
+        "missed_periods": timing.get("missed_periods"),
         "lateness_median_us": timing.get("lateness_median_s", float("nan")) * 1e6,
         "lateness_p99_us": timing.get("lateness_p99_s", float("nan")) * 1e6,
         "lateness_max_us": timing.get("lateness_max_s", float("nan")) * 1e6,

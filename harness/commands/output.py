@@ -20,6 +20,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from harness.commands.options import STDOUT
+from harness.signals.timing_counts import TimingCounts, stall_words
 
 #: Width of a command's output when it is not a terminal (characters): no line is wrapped or cut, and
 #: tables keep every column in one block. ``$COLUMNS`` still sets it when given.
@@ -115,13 +116,13 @@ def print_timing(console: Console, timing: dict, rate_hz: float) -> None:
         f"loop at {rate_hz:g} Hz: {timing['ticks']} ticks, lateness median {timing['lateness_median_s'] * 1e6:.1f} us, "
         f"p99 {timing['lateness_p99_s'] * 1e6:.1f} us, max {timing['lateness_max_s'] * 1e6:.0f} us; compute median "
         f"{timing['compute_median_s'] * 1e6:.1f} us, p99 {timing['compute_p99_s'] * 1e6:.1f} us (CPU of the loop thread: median "
-        f"{timing['cpu_median_s'] * 1e6:.1f} us); deadlines skipped {timing['overruns']}"
+        f"{timing['cpu_median_s'] * 1e6:.1f} us)"
     )
     if "stall_budget_s" in timing and not timing.get("lockstep", False):
+        counts = TimingCounts(timing["missed_periods"], timing["stalls"])
         console.print(
-            f"stalls ridden through {timing['stalls_ridden_through']}, past the budget {timing.get('gaps_past_budget', 0)} "
-            f"(each a stall_past_budget event), longest gap between ticks {timing['longest_stall_s'] * 1e3:.1f} ms "
-            f"(stall budget {timing['stall_budget_s'] * 1e3:.1f} ms)"
+            f"loop stalls: {stall_words(counts, timing.get('gaps_past_budget', 0), timing['longest_stall_s'])} "
+            f"(stall budget {timing['stall_budget_s'] * 1e3:.1f} ms; each past it a stall_past_budget event)"
         )
 
 
@@ -140,16 +141,24 @@ def print_outcome(console: Console, session, virtual_rig: bool = False, weakened
     lost = f", [bold red]record lost[/]: {escape(session.record_problem)}; repeat the test for its data" \
         if session.record_problem else ""
     check = table_check(session.loop.table_record)  # the table against the record it was told (harness/safety/table_record.py)
-    doubtful = ", [bold yellow]with a warning: the table check is marginal[/]" if check.verdict == "marginal" else ""
+    base = _base_sensor_sign(session, check.verdict)
+    doubtful = {"marginal": ", [bold yellow]with a warning: the table check is marginal[/]",
+                "waiting": ", [bold yellow]with a warning: the table check never judged[/]"}.get(check.verdict, "")
+    if base is not None and base.warns:
+        what = " moved against the table" if base.verdict == "against_table" else "'s sign was not judged"
+        doubtful += f", [bold yellow]with a warning: the base-mat sensor{what}[/]"
     weakened_text = f"; [bold red]{escape(summary(weakened))}[/]" if weakened else ""
     print_always(console, f"outcome: [{style}]{session.outcome}[/]{reason}{lost}{doubtful}; run folder "
                  f"{escape(str(session.run_path))}{weakened_text}")
     if session.loop.trip_detail and not (check.verdict == "mismatch" and session.trip_reason == "table_record_mismatch"):
         console.print(f"  {escape(session.loop.trip_detail)}", highlight=False)  # (the check's own line says it then)
     if check.line:
-        check_style = {"mismatch": "bold red", "marginal": "bold yellow", "match": "green"}.get(check.verdict, "")
+        check_style = {"mismatch": "bold red", "marginal": "bold yellow", "waiting": "bold yellow",
+                       "match": "green"}.get(check.verdict, "")
         text = escape(check.line)
         console.print(f"  [{check_style}]{text}[/]" if check_style else f"  {text}", highlight=False)
+    if base is not None:
+        console.print(f"  [{'bold yellow' if base.warns else 'green'}]{escape(base.line)}[/]", highlight=False)
     realtime = not session.loop.timing.get("lockstep", False)
     if virtual_rig and realtime and session.trip_reason in _HOST_TIMING_ON_A_VIRTUAL_RIG:
         console.print(
@@ -158,6 +167,25 @@ def print_outcome(console: Console, session, virtual_rig: bool = False, weakened
         )
     for line in session.loop.realtime_report:
         console.print(f"  {line}")
+
+
+def _base_sensor_sign(session, table_verdict: str):
+    """The base-mat sensor's sign over the run's record (harness/report/sensor_signs.py), or None.
+
+    None for a run with no record to judge by (an identification: the table check is off), for one the
+    table check found playing something else (the table's own signal is then no reference), and for a
+    run folder whose signals cannot be read (its record problem is reported on its own).
+    """
+    from harness.errors import HarnessError
+    from harness.recording import load_run
+    from harness.report.sensor_signs import run_base_sensor_sign
+
+    if table_verdict not in ("match", "marginal", "waiting") or session.loop.record_start_t_s is None:
+        return None
+    try:
+        return run_base_sensor_sign(load_run(session.run_path))
+    except (OSError, HarnessError, KeyError, ValueError):
+        return None
 
 
 def print_host_timing(console: Console):

@@ -28,6 +28,7 @@ from rich.text import Text
 from drivers.protocol_values import FaultCode
 from harness.loop.status import TABLE_VERDICT_NAMES, LoopStatus
 from harness.paths import PROJECT_ROOT
+from harness.signals.timing_counts import TimingCounts, stall_words
 
 _STATE_STYLE = {"IDLE": "dim", "ARMED": "yellow", "RUNNING": "green", "STOPPING": "yellow", "DONE": "cyan", "TRIPPED": "bold red"}
 #: How long :meth:`LiveConsole.__exit__` waits for the child to draw its last frame and exit (s).
@@ -186,9 +187,8 @@ def status_panel(status: LoopStatus, soft_limit_m: float, hard_limit_m: float, f
     for name, values in _story_rows(s):
         grid.add_row(name, values)
     p50, p99 = s.lateness_percentiles()
-    grid.add_row("loop lateness", f"p50 {p50 * 1e6:7.1f} us   p99 {p99 * 1e6:7.1f} us   overruns {s.overruns}")
-    grid.add_row("loop stalls", f"stalls ridden through {s.stalls}, past the budget {s.gaps_past_budget}, "
-                                f"longest {s.longest_stall_s * 1e3:.1f} ms, missed periods {s.missed_periods}")
+    grid.add_row("loop lateness", f"p50 {p50 * 1e6:7.1f} us   p99 {p99 * 1e6:7.1f} us")
+    grid.add_row("loop stalls", stall_words(TimingCounts(s.missed_periods, s.stalls), s.gaps_past_budget, s.longest_stall_s))
     grid.add_row("frame errors", f"E2E rejects {s.e2e_rejects}   error frames {s.error_frames}   send failures {s.send_failures}")
     grid.add_row("events", _events_text(s))
     return Panel(grid, title=title, subtitle="Ctrl-C: safe stop   Ctrl-C twice: trip")

@@ -29,6 +29,7 @@ from harness.recording.layout import Outcome
 from harness.safety.lifecycle import State
 from harness.safety.operator_detectors import HOST_TIMING_REMEDIES
 from harness.safety.supervisor import SupervisedCommand
+from harness.signals.timing_counts import TimingCounts, missed_periods
 
 _FINAL = (State.DONE, State.TRIPPED)
 #: The outcome of a run that ended in each final state (any other: ``stopped``).
@@ -133,14 +134,13 @@ class ControlLoop:
         self.last_gap_past_budget_s = 0.0
         self.last_gap_past_budget_end_s = 0.0
         self.signals = OperatorSignals()
-        #: Stalls ridden through (two periods or more between the starts of two ticks, within the budget).
-        self.stalls = 0
+        #: Missed periods and stalls so far, tick by tick (:mod:`harness.signals.timing_counts` defines them;
+        #: the rows' ``overrun`` column holds each tick's missed periods, so its sum is ``counts.missed_periods``).
+        self.counts = TimingCounts()
+        #: Stalls ridden through (within the budget): ``counts.stalls`` less :attr:`gaps_past_budget`.
+        self.stalls_ridden_through = 0
         #: Longest time between the starts of two consecutive ticks so far, counted when a stall (s).
         self.longest_stall_s = 0.0
-        #: Whole periods missed in stalls so far, beyond the budget too (the sum of the rows' ``overrun`` column).
-        #: The scheduler's ``overruns`` counts the deadlines it skipped instead: the same events seen from the
-        #: deadlines, not from the gaps between ticks (a late wake-up is a stall it does not count).
-        self.missed_periods = 0
         #: The stall budget (s): ridden through up to here, tripped beyond (the supervisor's ``loop_stall``).
         self.max_stall_s = tick.supervisor.config.run.max_stall_s
         #: The lifecycle state after the latest tick: the phase a gap that follows it begins in.
@@ -223,10 +223,11 @@ class ControlLoop:
         return k * self.period_s, 0.0
 
     def _note_stall(self, t: float, stall_s: float, woke_s: float) -> int:
-        """Count a stall the loop rides through, record one past the budget; return the whole periods missed.
+        """Count the tick's missed periods and its stall, record one past the budget; return the missed periods.
 
         A stall is a gap of two periods or more between the starts of two ticks (one or more
-        deadlines passed without a tick). Within the budget the stall is counted, shown on the
+        missed periods; :mod:`harness.signals.timing_counts` defines both, and every display
+        takes them from there). Within the budget the stall is counted, shown on the
         console and recorded as a ``timing`` event ``stall_ridden_through``. Beyond it the
         supervisor trips (``loop_stall``) where the drive may be enabled, and in every phase the
         loop records a ``timing`` event ``stall_past_budget``: the gap's start and end (loop
@@ -234,13 +235,13 @@ class ControlLoop:
         so every gap the console's "longest" counts is in the record (docs/SAFETY.md, "Stall
         attribution"). In lockstep (``stall_s`` 0) the rig waits for the loop.
         """
-        missed = int(stall_s / self.period_s + 1e-9) - 1
+        missed = missed_periods(stall_s, self.period_s)
         if missed < 1:
             return 0
-        self.missed_periods += missed
+        self.counts.add(missed)
         self.longest_stall_s = max(self.longest_stall_s, stall_s)
         if stall_s <= self.max_stall_s:
-            self.stalls += 1
+            self.stalls_ridden_through += 1
             self.tick.supervisor.events.push(
                 t, "timing", "stall_ridden_through",
                 f"{stall_s * 1e3:.1f} ms between two ticks ({missed} missed periods), within the "
@@ -324,13 +325,13 @@ class ControlLoop:
             tick.send_disable(self.scheduler.elapsed_s)
             self.signals.restore()
             restore_realtime(report)
-            timing.overruns = self.scheduler.overruns
         supervisor = tick.supervisor
         return LoopResult(
             outcome=ending.outcome,
             trip_reason=ending.reason,
             trip_detail=ending.detail,
-            timing={**timing.summary(), "threads": threads, "stalls_ridden_through": self.stalls,
+            timing={**timing.summary(), "threads": threads, "missed_periods": self.counts.missed_periods,
+                    "stalls": self.counts.stalls, "stalls_ridden_through": self.stalls_ridden_through,
                     "longest_stall_s": self.longest_stall_s, "stall_budget_s": self.max_stall_s,
                     "gaps_past_budget": self.gaps_past_budget,
                     "lockstep": self.lockstep is not None},
@@ -359,7 +360,7 @@ class ControlLoop:
         lateness_s : float
             The tick's wake-up lateness (s), for the console's percentiles.
         """
-        status, tick, health, scheduler = self.status, self.tick, self.tick.health, self.scheduler
+        status, tick, health = self.status, self.tick, self.tick.health
         status.state = command.state  # a State: stored as its code, read back as its name
         status.t_s = t
         status.run_t_s = 0.0 if run_started is None else t - run_started
@@ -367,14 +368,13 @@ class ControlLoop:
         status.stroke_m = tick.meas.sliding_displacement_m
         status.force_N = command.force_N
         status.sliding_variable = tick.controller.sliding_variable
-        status.overruns = scheduler.overruns
         status.e2e_rejects = health.e2e_rejects
         status.error_frames = health.error_frames
         status.send_failures = health.send_failures
-        status.stalls = self.stalls
+        status.stalls = self.counts.stalls
         status.gaps_past_budget = self.gaps_past_budget
         status.longest_stall_s = self.longest_stall_s
-        status.missed_periods = self.missed_periods
+        status.missed_periods = self.counts.missed_periods
         status.last_event = tick.last_event
         status.trip_reason = command.trip_reason
         table = tick.supervisor.table_record

@@ -1,4 +1,7 @@
-"""Per-tick timing of the loop: wake-up lateness, compute time, overruns, and where a long gap went (preallocated)."""
+"""Per-tick timing of the loop: wake-up lateness, compute time, and where a long gap went (preallocated).
+
+The counts of missed periods and stalls are :mod:`harness.signals.timing_counts`'s.
+"""
 
 from __future__ import annotations
 
@@ -19,7 +22,7 @@ class TimingStats:
         Most ticks recorded; later ticks only update the counters.
     """
 
-    __slots__ = ("lateness_s", "compute_s", "cpu_s", "count", "overruns", "_capacity", "_views")
+    __slots__ = ("lateness_s", "compute_s", "cpu_s", "count", "_capacity", "_views")
 
     def __init__(self, capacity: int):
         self._capacity = int(capacity)
@@ -28,7 +31,6 @@ class TimingStats:
         self.cpu_s = prefaulted_zeros(self._capacity)
         self._views = (float_view(self.lateness_s), float_view(self.compute_s), float_view(self.cpu_s))
         self.count = 0
-        self.overruns = 0
 
     def add(self, lateness_s: float, compute_s: float, cpu_s: float = 0.0) -> None:
         """Record one tick (no allocation).
@@ -61,11 +63,11 @@ class TimingStats:
         return float(p50), float(p99)
 
     def summary(self) -> dict:
-        """Median, p99, p99.9 and max of lateness, compute (wall-clock) and CPU time per tick (s), and counts."""
+        """Median, p99, p99.9 and max of lateness, compute (wall-clock) and CPU time per tick (s), and the tick count."""
         n = min(self.count, self._capacity)
         if n == 0:
-            return {"ticks": 0, "overruns": self.overruns}
-        result: dict = {"ticks": self.count, "overruns": self.overruns}
+            return {"ticks": 0}
+        result: dict = {"ticks": self.count}
         for name, values in (("lateness", self.lateness_s[:n]), ("compute", self.compute_s[:n]), ("cpu", self.cpu_s[:n])):
             p50, p99, p999 = np.percentile(values, [50, 99, 99.9])
             result[f"{name}_median_s"] = float(p50)

@@ -5,8 +5,10 @@ until ``spin_s`` before the deadline and spins the rest, which on these machines
 a median wake-up lateness of ~50 us (plain sleep) into well under 1 us (benchmarks/README.md,
 "Timing facts the loop is built on").
 When a tick runs so long that whole deadlines pass, those deadlines are skipped
-(counted as overruns) and the loop runs at once on the latest one that passed, late,
-instead of bursting through the missed ticks one after another.
+(counted in ``skipped_deadlines``, the scheduler's own bookkeeping) and the loop runs at once
+on the latest one that passed, late, instead of bursting through the missed ticks one after
+another. What the harness shows as missed periods and stalls is measured from the gaps between
+the ticks' starts instead (:mod:`harness.signals.timing_counts`), which a late wake-up lengthens too.
 
 The clock and the sleep function are injectable so tests run on simulated time.
 """
@@ -45,14 +47,15 @@ class FixedRateScheduler:
         Index of the current tick (0 for the first).
     lateness_s : float
         How late the current tick woke, against its deadline (s).
-    overruns : int
-        Deadlines missed in total (the previous tick ran past this tick's deadline).
-    consecutive_overruns : int
-        Overruns in a row, reset by a tick on time.
+    skipped_deadlines : int
+        Deadlines skipped in total (whole deadlines passed before the wait began).
+    consecutive_skips : int
+        Waits in a row that skipped deadlines, reset by a wait that skipped none.
     """
 
     __slots__ = (
-        "period_s", "spin_s", "_clock", "_sleep", "_start", "_deadline", "tick", "lateness_s", "overruns", "consecutive_overruns",
+        "period_s", "spin_s", "_clock", "_sleep", "_start", "_deadline", "tick", "lateness_s", "skipped_deadlines",
+        "consecutive_skips",
     )
 
     def __init__(
@@ -72,16 +75,16 @@ class FixedRateScheduler:
         self._deadline = 0.0
         self.tick = -1
         self.lateness_s = 0.0
-        self.overruns = 0
-        self.consecutive_overruns = 0
+        self.skipped_deadlines = 0
+        self.consecutive_skips = 0
 
     def start(self) -> float:
         """Set tick 0's deadline to now; return it (the loop's time origin, s)."""
         self._start = self._clock()
         self._deadline = self._start
         self.tick = -1
-        self.overruns = 0
-        self.consecutive_overruns = 0
+        self.skipped_deadlines = 0
+        self.consecutive_skips = 0
         return self._start
 
     @property
@@ -92,7 +95,7 @@ class FixedRateScheduler:
     def wait(self) -> float:
         """Block until the next tick's deadline; return its scheduled time since start (s).
 
-        Counts an overrun for every deadline that passed entirely while the tick
+        Counts a skipped deadline for every deadline that passed entirely while the tick
         before ran long, skips those, and returns at once on the latest one.
         """
         self.tick += 1
@@ -103,10 +106,10 @@ class FixedRateScheduler:
             missed = int((now - self._deadline) / self.period_s)
             self._deadline += missed * self.period_s
             self.tick += missed
-            self.overruns += missed
-            self.consecutive_overruns += 1
+            self.skipped_deadlines += missed
+            self.consecutive_skips += 1
         else:
-            self.consecutive_overruns = 0
+            self.consecutive_skips = 0
         remaining = self._deadline - now - self.spin_s
         if remaining > 0:
             self._sleep(remaining)

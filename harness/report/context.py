@@ -139,7 +139,8 @@ def timing_table(runs: Sequence[RunData]) -> TextTable | None:
         ("Compute p99.9 (us)", _micro("compute_p999_s")),
         ("Compute max (us)", _micro("compute_max_s")),
         ("CPU of the loop thread p50 (us)", _micro("cpu_median_s")),
-        ("Deadlines skipped", lambda run: _format(_timing(run).get("overruns"))),
+        ("Missed periods", lambda run: _format(_timing(run).get("missed_periods"))),
+        ("Stalls", lambda run: _format(_timing(run).get("stalls"))),
         ("Stalls ridden through", lambda run: _format(_timing(run).get("stalls_ridden_through"))),
         ("Longest stall (ms)", lambda run: _format(_timing(run).get("longest_stall_s"), 1e3, 1)),
         ("Stall budget (ms)", lambda run: _format(_timing(run).get("stall_budget_s"), 1e3, 1)),
@@ -147,7 +148,9 @@ def timing_table(runs: Sequence[RunData]) -> TextTable | None:
     ]
     note = ("Compute = wall-clock time of a tick from its start until its command is sent and its events handed "
             "on, as the console prints it at the end of a run; the compute_s column of signals.csv holds the same "
-            "measurement, tick by tick. In lockstep the loop waits for the rig, so lateness is not measured.")
+            "measurement, tick by tick. Missed periods = the whole periods beyond the first between the starts of "
+            "two ticks, summed (the overrun column of signals.csv, tick by tick); a stall = a tick with at least "
+            "one. In lockstep the loop waits for the rig, so lateness, missed periods and stalls are not measured.")
     return _table("Loop timing", timed, rows, note)
 
 

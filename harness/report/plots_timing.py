@@ -18,6 +18,7 @@ from matplotlib.axes import Axes
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend
+from harness.signals.timing_counts import TimingCounts
 
 
 def _timing(run: RunData) -> Mapping[str, Any]:
@@ -38,8 +39,8 @@ def _histogram(ax: Axes, run: RunData, column: str, colour: str) -> bool:
     p50, p99 = np.percentile(values, (50, 99))
     label = f"{run.label}: p50 {p50:.0f}, p99 {p99:.0f}, max {values.max():.0f} µs"
     if column == "lateness_s":
-        overruns = int(np.nansum(run["overrun"] > 0)) if run.has("overrun") else 0
-        label += f", {overruns} overruns"
+        if run.has("overrun"):
+            label += f", {TimingCounts.of_overrun_column(run['overrun']).words()}"
     ax.hist(values, bins=60, color=colour, alpha=0.6, label=label)
     return True
 

@@ -29,6 +29,9 @@ id      kind            targets           effect (param, SI)
 120     estop           -                 the rig sends ESTOP (source 1) and the drive goes ESTOP
 130+t   sign_flip       0-3               signal number ``param`` (0, 1 or 2 in DBC order: 1 is
                                           xdot_0 / ydot_b) is sent negated, a polarity fault
+140+t   polarity        0-3               every signal of the message is sent negated: a whole
+                                          sensor of the wrong polarity (displacement, velocity
+                                          and acceleration flipped together, self-consistent)
 ======  ==============  ================  =====================================================
 
 Drive fault codes in ACTUATOR_STATUS: see :mod:`harness.rig.drive`.
@@ -46,13 +49,13 @@ TARGETS = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACT
 SENSOR_TARGETS = 4
 KINDS = (
     "", "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
-    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip",
+    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip", "polarity",
 )
 DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER = 1, 2, 3, 4, 5, 6, 7
 EXTRA_DELAY, BUS_SILENCE, DRIVE_FAULT, PRESSURE_LOST, ESTOP = 8, 9, 10, 11, 12
-SIGN_FLIP = 13
-_SENSOR_ONLY = (STUCK, SPIKE, NOISE_BURST, SIGN_FLIP)
-_TARGETED = (DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER, SIGN_FLIP)
+SIGN_FLIP, POLARITY = 13, 14
+_SENSOR_ONLY = (STUCK, SPIKE, NOISE_BURST, SIGN_FLIP, POLARITY)
+_TARGETED = (DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER, SIGN_FLIP, POLARITY)
 MAX_EXTRA_DELAY_S = 1.0
 #: Signals per sensor message (every sensor message carries three): valid ``sign_flip`` params.
 SIGNALS_PER_SENSOR_MESSAGE = 3
@@ -217,6 +220,10 @@ class FaultSet:
         if not self.active[SIGN_FLIP, target]:
             return -1
         return sign_flip_signal(float(self.param[SIGN_FLIP, target]))
+
+    def reversed_polarity(self, target: int) -> bool:
+        """True while every signal of sensor message ``target`` is sent negated (a ``polarity`` fault)."""
+        return bool(self.active[POLARITY, target])
 
     @property
     def extra_delay_s(self) -> float:

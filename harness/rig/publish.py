@@ -103,6 +103,9 @@ class RigPublisher:
         flipped = faults.flipped_signal(target)
         if flipped >= 0:
             values[flipped] = -values[flipped]
+        if faults.reversed_polarity(target):
+            for signal in range(len(values)):
+                values[signal] = -values[signal]
         values[0] += faults.take_spike(target)
         self._clip(target)
         return values

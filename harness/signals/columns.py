@@ -65,7 +65,7 @@ INTERLOCK_FLAGS: Final = "interlock_flags"
 
 LATENESS: Final = "lateness_s"
 COMPUTE: Final = "compute_s"
-OVERRUN: Final = "overrun"  #: deadlines missed before the tick
+OVERRUN: Final = "overrun"  #: missed periods before the tick (harness.signals.timing_counts)
 
 E2E_REJECTS: Final = "e2e_rejects"
 ERROR_FRAMES: Final = "error_frames"

@@ -32,8 +32,9 @@ DEADLINE_S = 60.0
 
 def _full_status() -> LoopStatus:
     status = LoopStatus(state="STOPPING", phase="tail", t_s=41.5, run_t_s=30.25, duration_s=30.0, stroke_m=-0.0421,
-                        force_N=-2500.0, sliding_variable=0.0123, overruns=4, e2e_rejects=3, error_frames=2, send_failures=1,
-                        stalls=5, longest_stall_s=0.0072, missed_periods=6, last_event="41.500 s  fault x: é ✓",
+                        force_N=-2500.0, sliding_variable=0.0123, e2e_rejects=3, error_frames=2, send_failures=1,
+                        stalls=5, gaps_past_budget=1, longest_stall_s=0.0072,
+                        missed_periods=6, last_event="41.500 s  fault x: é ✓",
                         trip_reason="")
     for k in range(700):
         status.add_lateness(k * 1e-6)
@@ -63,9 +64,9 @@ def test_state_codes_are_the_lifecycle_states():
 
 
 def test_keyword_construction_sets_fields_and_refuses_unknown_ones():
-    with LoopStatus(state="TRIPPED", trip_reason="stroke_hard", run_t_s=12.0, overruns=2) as status:
-        assert (status.state, status.trip_reason, status.run_t_s, status.overruns) == ("TRIPPED", "stroke_hard", 12.0, 2)
-        assert isinstance(status.overruns, int) and status.phase == "starting" and status.last_event == ""
+    with LoopStatus(state="TRIPPED", trip_reason="stroke_hard", run_t_s=12.0, missed_periods=2) as status:
+        assert (status.state, status.trip_reason, status.run_t_s, status.missed_periods) == ("TRIPPED", "stroke_hard", 12.0, 2)
+        assert isinstance(status.missed_periods, int) and status.phase == "starting" and status.last_event == ""
         status.state = State.RUNNING
         assert status.state == "RUNNING"
         with pytest.raises(ValueError, match="unknown run state"):
@@ -127,7 +128,6 @@ def test_writing_fields_every_tick_allocates_nothing():
             status.run_t_s = t
             status.stroke_m = t
             status.force_N = t
-            status.overruns = k
             status.stalls = k
             status.longest_stall_s = t
             status.missed_periods = k
@@ -176,8 +176,9 @@ def test_the_panel_shows_stalls_and_lateness_from_the_ring():
         console = Console(record=True, width=140)
         console.print(LiveConsole(status, 0.08, 0.1, 10_000.0, "panel title", enabled=False))
         text = console.export_text()
-    for expected in ("STOPPING", "panel title", "stalls ridden through 5, past the budget 0, longest 7.2 ms, missed periods 6",
-                     "p50   443.5 us", "overruns 4", "-42.10 mm", "-2.500 kN", "fault x: é ✓"):
+    for expected in ("STOPPING", "panel title",
+                     "6 missed periods in 5 stalls (ridden through 4, past the budget 1), longest 7.2 ms",
+                     "p50   443.5 us", "-42.10 mm", "-2.500 kN", "fault x: é ✓"):
         assert expected in text, expected
 
 

@@ -1,11 +1,12 @@
-"""What the real-time loop counts, on a fake clock: overruns, missed periods, compute time.
+"""What the real-time loop counts, on a fake clock: missed periods, stalls, compute time.
 
 The whole :class:`~harness.loop.runner.ControlLoop` runs its real-time path (scheduler,
 poll, supervisor) against the rig-side node of tests/unit/test_control_tick.py, on a
 clock that moves only when the loop reads or sleeps it; the node publishes whenever the
 loop sleeps. Once, the host wakes the loop late (the sleep overshoots): seen from the
-gaps between ticks that is a stall of whole missed periods, seen from the deadlines one
-skipped deadline, and the loop keeps the two counts apart.
+gaps between ticks that is one stall of two whole missed periods, though the scheduler skips only
+one deadline; every count the loop shows is the gaps' (harness.signals.timing_counts), the same
+in the status block, the timing summary and the rows' ``overrun`` column.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from harness.loop.config import LoopConfig
 from harness.loop.runner import ControlLoop
 from harness.loop.status import LoopStatus
 from harness.signals import columns as layout
+from harness.signals.timing_counts import TimingCounts
 from tests.unit.test_control_tick import PERIOD_S, Bench
 
 #: Arm, settle 20 ms, 0.2 s of record, no tail.
@@ -66,7 +68,7 @@ def run():
         with LoopStatus() as status:
             loop = ControlLoop(bench.tick, CONFIG, 1.0 / PERIOD_S, 0.2, status=status, clock=clock, sleep=clock.sleep)
             result = loop.run()
-            counts = (status.overruns, status.missed_periods, status.stalls)
+            counts = (status.missed_periods, status.stalls)
     finally:
         bench.close()
     return loop, result, np.array(rows.rows), counts
@@ -78,13 +80,18 @@ def test_the_run_completes_and_passes_the_late_wake_up(run) -> None:
     assert len(rows) == loop.timing.count > 200
 
 
-def test_overruns_count_skipped_deadlines_and_missed_periods_the_gaps_between_ticks(run) -> None:
-    loop, result, rows, (overruns, missed_periods, stalls) = run
+def test_missed_periods_and_stalls_are_counted_from_the_gaps_between_ticks_everywhere(run) -> None:
+    loop, result, rows, (missed_periods, stalls) = run
     # the late tick began 2.5 periods (less the spin) after its deadline: 3.4 periods after the tick
-    # before it, 2 whole periods missed; the tick after it found one deadline already passed
-    assert (overruns, missed_periods, stalls) == (1, 2, 1)
-    assert overruns == loop.scheduler.overruns == result.timing["overruns"]
-    assert missed_periods == loop.missed_periods == rows[:, layout.CONTROL_ROW_INDEX[layout.OVERRUN]].sum()
+    # before it, 2 whole periods missed; the tick after it found one deadline already passed, which
+    # the scheduler alone counts (its own bookkeeping, shown nowhere)
+    assert (missed_periods, stalls) == (2, 1)
+    assert loop.scheduler.skipped_deadlines == 1
+    assert "overruns" not in result.timing
+    assert (result.timing["missed_periods"], result.timing["stalls"]) == (missed_periods, stalls)
+    assert result.timing["stalls_ridden_through"] + result.timing["gaps_past_budget"] == stalls
+    column = TimingCounts.of_overrun_column(rows[:, layout.CONTROL_ROW_INDEX[layout.OVERRUN]])
+    assert column == loop.counts == TimingCounts(missed_periods, stalls)
 
 
 def test_the_row_and_the_timing_summary_take_one_compute_measurement(run) -> None:

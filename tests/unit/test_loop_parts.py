@@ -72,13 +72,14 @@ def test_stroke_bar_puts_the_cursor_where_the_stroke_is():
 
 def test_console_shows_state_stroke_force_timing_and_the_last_event():
     status = LoopStatus(state="TRIPPED", trip_reason="stroke_hard", run_t_s=12.0, duration_s=30.0, stroke_m=0.0952,
-                        force_N=-2500.0, sliding_variable=0.0123, overruns=2, e2e_rejects=3,
+                        force_N=-2500.0, sliding_variable=0.0123, missed_periods=2, stalls=1, e2e_rejects=3,
                         last_event="12.000 s fault stroke_hard")
     console = Console(record=True, width=120)
     live = LiveConsole(status, 0.08, 0.1, 10_000.0, "test", console, enabled=False)
     console.print(live)
     text = console.export_text()
     for expected in (
-        "TRIPPED", "stroke_hard", "12.0 / 30.0 s", "+95.20 mm", "-2.500 kN", "overruns 2", "E2E rejects 3", "fault stroke_hard",
+        "TRIPPED", "stroke_hard", "12.0 / 30.0 s", "+95.20 mm", "-2.500 kN", "2 missed periods in 1 stall",
+        "E2E rejects 3", "fault stroke_hard",
     ):
         assert expected in text, expected

@@ -21,7 +21,8 @@ N = 1000
 PERIOD_S = 0.004
 START_S = 0.2  # loop time at which the record started
 WEIGHT_N = 39855.0
-TIMING = {"ticks": N, "overruns": 0, "lateness_median_s": 4e-5, "lateness_p99_s": 9e-5, "lateness_p999_s": 2e-4,
+TIMING = {"ticks": N, "missed_periods": 2, "stalls": 1,
+          "lateness_median_s": 4e-5, "lateness_p99_s": 9e-5, "lateness_p999_s": 2e-4,
           "lateness_max_s": 3e-4, "compute_median_s": 2e-4, "compute_p99_s": 505e-6, "compute_p999_s": 7e-4,
           "compute_max_s": 9e-4, "cpu_median_s": 1.5e-4, "cpu_p99_s": 3e-4, "cpu_p999_s": 4e-4, "cpu_max_s": 5e-4,
           "stalls_ridden_through": 1, "longest_stall_s": 0.006, "stall_budget_s": 0.02, "lockstep": False}
@@ -122,7 +123,7 @@ def test_console_and_report_agree_on_compute_p99(report) -> None:
     (timing,) = [t for t in result.context if t.title == "Loop timing"]
     cells = {row[0]: row[1] for row in timing.rows}
     assert cells["Compute p99 (us)"] == f"{TIMING['compute_p99_s'] * 1e6:.1f}" == "505.0"  # what print_timing shows
-    assert cells["Deadlines skipped"] == "0" and cells["Pre-flight check"] == "ok"
+    assert cells["Missed periods"] == "2" and cells["Stalls"] == "1" and cells["Pre-flight check"] == "ok"
 
 
 def test_target_against_achieved_names_the_peaks_and_the_tracking_error(report) -> None:

@@ -164,9 +164,10 @@ def test_a_gap_past_the_budget_before_arming_is_recorded_and_named_in_a_refusal_
         assert loop._stall_note() == ""  # no gap past the budget yet: nothing to add
         drained: list[tuple[str, str]] = []
         missed = loop._note_stall(0.3, 0.0199, 0.3)  # within the budget: ridden through, not past it
-        assert missed == 8 and loop.gaps_past_budget == 0 and loop.stalls == 1
+        assert missed == 8 and loop.gaps_past_budget == 0 and loop.stalls_ridden_through == 1 and loop.counts.stalls == 1
         missed = loop._note_stall(0.5, 0.1013, 0.5014)  # in IDLE (the loop's phase before arming)
-        assert missed == 49 and loop.gaps_past_budget == 1 and loop.stalls == 1
+        assert missed == 49 and loop.gaps_past_budget == 1 and loop.stalls_ridden_through == 1
+        assert (loop.counts.stalls, loop.counts.missed_periods) == (2, 8 + 49)  # every stall, ridden through or not
         assert loop.longest_stall_s == 0.1013 and loop.last_gap_past_budget_s == 0.1013
         bench.supervisor.events.drain(lambda t, kind, name, detail: drained.append((name, detail)))
         name, detail = drained[-1]
