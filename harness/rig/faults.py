@@ -29,7 +29,13 @@ id      kind            targets           effect (param, SI)
 120     estop           -                 the rig sends ESTOP (source 1) and the drive goes ESTOP
 130+t   sign_flip       0-3               signal number ``param`` (0, 1 or 2 in DBC order: 1 is
                                           xdot_0 / ydot_b) is sent negated, a polarity fault
+140     seize           -                 the bearings seize: the sliding stops at once (a blocked
+                                          piston) and the base mat moves with the table while on
 ======  ==============  ================  =====================================================
+
+``seize`` is a fault of the plant, not of a message: the virtual rig and the rig twin
+(``harness simulate --rig-effects``, which has no bus and acts on no message fault) both act on
+it through :meth:`harness.rig.table.TablePlant.set_seized`.
 
 Drive fault codes in ACTUATOR_STATUS: see :mod:`harness.rig.drive`.
 """
@@ -46,11 +52,12 @@ TARGETS = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACT
 SENSOR_TARGETS = 4
 KINDS = (
     "", "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
-    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip",
+    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip", "seize",
 )
 DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER = 1, 2, 3, 4, 5, 6, 7
 EXTRA_DELAY, BUS_SILENCE, DRIVE_FAULT, PRESSURE_LOST, ESTOP = 8, 9, 10, 11, 12
 SIGN_FLIP = 13
+SEIZE = 14
 _SENSOR_ONLY = (STUCK, SPIKE, NOISE_BURST, SIGN_FLIP)
 _TARGETED = (DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER, SIGN_FLIP)
 MAX_EXTRA_DELAY_S = 1.0
