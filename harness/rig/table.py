@@ -82,7 +82,9 @@ class TablePlant:
         self._floor_map = np.ascontiguousarray(floor_map[:3])
         self._size = model.size
         self._floor_acc = np.zeros(3)
-        self._pinned_by_profile = 0.0 if self.rig_params is None else float(self.rig_params[BASE_PINNED])
+        #: The plant couples the rig's hydraulics (packed rig parameters): only then can its bearings seize.
+        self.can_seize = self.rig_params is not None and self.rig_params.size > BASE_PINNED
+        self._pinned_by_profile = float(self.rig_params[BASE_PINNED]) if self.can_seize else 0.0
         #: The bearings are seized (the ``seize`` fault): the base mat moves with the table.
         self.seized = False
         #: The sliding velocity the last seize stopped (m/s; NaN before any).
@@ -118,7 +120,7 @@ class TablePlant:
         if seized == self.seized:
             return
         params = self.rig_params
-        if params is None:
+        if not self.can_seize:
             raise ModelError("a seized bearing needs the rig's coupled plant: a servo-hydraulic actuator or table")
         if seized:
             y = self.live.y

@@ -201,7 +201,7 @@ class VirtualRig:
     def _update_faults(self) -> None:
         self.faults.update(self.table.record_time_s if self.table.started else None)
         self.sensors.set_delays(self.faults.extra_delay_s, self.n_sub if self.lockstep else None)
-        if self.table.rig_params is not None:  # a force source on a motion-source table has no coupled plant to seize
+        if self.table.can_seize:  # a force source on a motion-source table has no coupled plant to seize
             self.table.set_seized(self.faults.is_on(SEIZE))
 
     def _injected_drive_code(self) -> int:
