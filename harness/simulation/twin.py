@@ -262,7 +262,7 @@ def _twin_result(
     columns = _measured_columns(times, samples)
     columns.update({name: true_columns[name] for name in layout.BEARING})
     columns.update(samples.columns(layout.TWIN_CONTROL))
-    extra = {"outcome": "tripped" if supervisor.state is State.TRIPPED else "completed",
+    extra: dict[str, object] = {"outcome": "tripped" if supervisor.state is State.TRIPPED else "completed",
              "trip_reason": supervisor.command.trip_reason,
              "true_peaks": peak_responses(true_columns, total_weight_N)}
     if rig.table.seized:  # a seize fault (rig.faults): the sliding velocity it stopped
