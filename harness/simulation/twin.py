@@ -262,9 +262,11 @@ def _twin_result(
     columns = _measured_columns(times, samples)
     columns.update({name: true_columns[name] for name in layout.BEARING})
     columns.update(samples.columns(layout.TWIN_CONTROL))
-    extra: dict[str, object] = {"outcome": "tripped" if supervisor.state is State.TRIPPED else "completed",
-             "trip_reason": supervisor.command.trip_reason,
-             "true_peaks": peak_responses(true_columns, total_weight_N)}
+    extra: dict[str, object] = {
+        "outcome": "tripped" if supervisor.state is State.TRIPPED else "completed",
+        "trip_reason": supervisor.command.trip_reason,
+        "true_peaks": peak_responses(true_columns, total_weight_N),
+    }
     if rig.table.seized:  # a seize fault (rig.faults): the sliding velocity it stopped
         extra["seized_at_velocity_m_s"] = rig.table.seized_at_velocity_m_s
     return case_result("rig twin", columns, total_weight_N, plant.steps + rig.substeps, started_s, extra)
