@@ -17,8 +17,11 @@ adaptive``, 30 s, time scale 2:
 3. ``residual``: the same inputs, fitted offline over the compensator's 2 s window at chosen
    times by least squares, with the three terms of (C5) and with a fourth, the sliding
    acceleration ``F(xddot_b) = (xdot_b - F(xdot_b)) / tau_f``: what the window asks of each term.
+4. ``with_acceleration`` (``--only with_acceleration``): that fourth term closed in the loop, a
+   measurement-only prototype (:class:`WithAcceleration`: numpy solves, clipped to the ranges and
+   ``a3`` to 0-2000 kg, not the shipped compensator), on El Centro with one period of asynchrony.
 
-Usage: python benchmarks/adaptive_trips.py [--records-dir DIR] [--out FILE]
+Usage: python benchmarks/adaptive_trips.py [--records-dir DIR] [--out FILE] [--only with_acceleration]
 """
 
 from __future__ import annotations
@@ -102,6 +105,81 @@ def twin_run(record: str, records_dir: str, overrides: tuple[str, ...], delay_s:
     return summary, rows
 
 
+class WithAcceleration:
+    """(C5) with a fourth term ``a3 F(xddot_b)``, fitted as the shipped compensator fits (C5); for measurement only.
+
+    The window, filter, reference, excitation check and ranges are the shipped compensator's,
+    ``a3`` held to 0-2000 kg; solved with numpy, clipped, and ``pinned`` when a fit was clipped.
+    """
+
+    name = "adaptive"
+
+    def __init__(self, start: tuple[float, float, float], window_s: float = 2.0, tau_f: float = 0.01, tau_r: float = 0.004):
+        self.size, self.tau_f, self.tau_r = int(round(window_s / PERIOD_S)), tau_f, tau_r
+        self.low, self.high = np.array([0.8, 0.0, 0.0, 0.0]), np.array([1.25, 0.02, 2.0e5, 2000.0])
+        self.start = np.array([*start, 0.0])
+        self.rows: list[tuple[float, ...]] = []
+        self.reset()
+
+    def reset(self) -> None:
+        """Empty window, coefficients at their start."""
+        self.ring = np.zeros((self.size, 5))
+        self.count = self.head = 0
+        self.coefficients = self.start.copy()
+        self.reference_N = self.command_N = self.bound_value = 0.0
+        self.pinned = self.diverged = self.primed = False
+        self.u_f = self.v_f = self.y_f = 0.0
+
+    def update(self, t: float, dt: float, force_N: float, meas: Measurements, applied_N: float) -> float:
+        """Learn from the previous command and this tick's response, then command ``a0 r + a1 r' + a2 v + a3 F(v')``."""
+        from harness.control.compensation import reference_step
+
+        u, v = meas.actuator_force_N, meas.sliding_velocity_m_s
+        if not self.primed:
+            self.u_f, self.v_f, self.y_f, self.primed = u, v, applied_N, True
+        alpha = 1.0 - math.exp(-dt / self.tau_f)
+        self.u_f += alpha * (u - self.u_f)
+        self.v_f += alpha * (v - self.v_f)
+        self.y_f += alpha * (applied_N - self.y_f)
+        self.ring[self.head] = (self.u_f, (u - self.u_f) / self.tau_f, self.v_f, (v - self.v_f) / self.tau_f, self.y_f)
+        self.head, self.count = (self.head + 1) % self.size, min(self.count + 1, self.size)
+        if 2 * self.count >= self.size:
+            x, y = self.ring[: self.count, :4], self.ring[: self.count, 4]
+            normal = x.T @ x
+            scale = np.sqrt(np.diag(normal))
+            if np.all(scale > 0) and np.linalg.det(normal / np.outer(scale, scale)) >= 1.0e-4:
+                solution = np.linalg.solve(normal, x.T @ y)
+                clipped = np.clip(solution, self.low, self.high)
+                self.pinned = bool(np.any(clipped != solution))
+                self.coefficients = clipped
+        self.reference_N, rate = reference_step(self.reference_N, force_N, dt, self.tau_r)
+        a = self.coefficients
+        self.command_N = float(a[0] * self.reference_N + a[1] * rate + a[2] * v + a[3] * (v - self.v_f) / self.tau_f)
+        self.rows.append((t, *a, float(self.pinned)))
+        return self.command_N
+
+
+def with_acceleration(records_dir: str, delay_s: float = PERIOD_S) -> dict:
+    """The prototype on El Centro with ``delay_s`` of asynchrony: outcome and its coefficients over the record."""
+    profile = _profile("el_centro", records_dir, ())
+    shipped = make_compensator(profile, controller="phi")
+    assert isinstance(shipped, AdaptiveCompensator)
+    prototype = WithAcceleration(tuple(float(x) for x in shipped.coefficients))
+    result = run_rig_twin(profile, prepare_motion(profile), 1.0 / PERIOD_S, build_controller_for_rig(profile, "phi"),
+                          asynchronous_delay_s=delay_s, compensator=prototype)  # type: ignore[arg-type]
+    rows = np.array(prototype.rows)
+    spans = []
+    for low, high in ((0.0, 5.0), (5.0, 10.0), (10.0, 15.0), (15.0, 20.0), (20.0, 30.0)):
+        m = (rows[:, 0] >= low) & (rows[:, 0] < high)
+        if m.any():
+            spans.append({"from_s": low, "to_s": high, "a0": [float(rows[m, 1].min()), float(rows[m, 1].max())],
+                          "a1_s": [float(rows[m, 2].min()), float(rows[m, 2].max())],
+                          "a2_Ns_per_m": [float(rows[m, 3].min()), float(rows[m, 3].max())],
+                          "a3_kg": [float(rows[m, 4].min()), float(rows[m, 4].max())], "ticks_pinned": int(rows[m, 5].sum())})
+    return {"record": "el_centro", "asynchrony_ms": delay_s * 1e3, "outcome": result.extra["outcome"],
+            "trip_reason": result.extra["trip_reason"], "end_s": float(rows[-1, 0]), "spans": spans}
+
+
 def _replay(rows: np.ndarray, force: np.ndarray, velocity: np.ndarray, applied: np.ndarray) -> np.ndarray:
     """Fresh compensator (the shipped settings, started from the model) fed the given inputs: its coefficients and flags."""
     compensator = make_compensator(load_profile(overrides=["control.compensation=adaptive"]), controller="phi")
@@ -180,7 +258,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--records-dir", default=str(REPO.parent / "shared" / "data" / "ground_motions"))
     parser.add_argument("--out", default=str(REPO / "benchmarks" / "results" / "adaptive_trips.json"))
+    parser.add_argument("--only", choices=("with_acceleration",), help="run this measurement alone, added to --out")
     args = parser.parse_args(argv)
+    if args.only == "with_acceleration":
+        out = Path(args.out)
+        results = json.loads(out.read_text()) if out.is_file() else {}
+        results["with_acceleration"] = with_acceleration(args.records_dir)
+        out.write_text(json.dumps(results, indent=1))
+        print(json.dumps(results["with_acceleration"]))
+        return 0
     runs, recorded = [], {}
     for rig, overrides in RIGS.items():
         delays = (0.0, PERIOD_S) if rig != "ideal feed-forward velocity" else (0.0,)
