@@ -18,7 +18,7 @@ from harness.rig.truth import TruthConfig
 
 FaultKind = Literal[
     "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
-    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip", "polarity",
+    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip", "polarity", "seize",
 ]
 FaultTarget = Literal["", "TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACTUATOR_STATUS", "RIG_STATUS"]
 

@@ -32,7 +32,13 @@ id      kind            targets           effect (param, SI)
 140+t   polarity        0-3               every signal of the message is sent negated: a whole
                                           sensor of the wrong polarity (displacement, velocity
                                           and acceleration flipped together, self-consistent)
+150     seize           -                 the bearings seize: the sliding stops at once (a blocked
+                                          piston) and the base mat moves with the table while on
 ======  ==============  ================  =====================================================
+
+``seize`` is a fault of the plant, not of a message: the virtual rig and the rig twin
+(``harness simulate --rig-effects``, which has no bus and acts on no message fault) both act on
+it through :meth:`harness.rig.table.TablePlant.set_seized`.
 
 Drive fault codes in ACTUATOR_STATUS: see :mod:`harness.rig.drive`.
 """
@@ -49,11 +55,11 @@ TARGETS = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACT
 SENSOR_TARGETS = 4
 KINDS = (
     "", "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
-    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip", "polarity",
+    "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip", "polarity", "seize",
 )
 DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER = 1, 2, 3, 4, 5, 6, 7
 EXTRA_DELAY, BUS_SILENCE, DRIVE_FAULT, PRESSURE_LOST, ESTOP = 8, 9, 10, 11, 12
-SIGN_FLIP, POLARITY = 13, 14
+SIGN_FLIP, POLARITY, SEIZE = 13, 14, 15
 _SENSOR_ONLY = (STUCK, SPIKE, NOISE_BURST, SIGN_FLIP, POLARITY)
 _TARGETED = (DROPOUT, STUCK, SPIKE, NOISE_BURST, CORRUPT_CRC, REPEAT_COUNTER, SKIP_COUNTER, SIGN_FLIP, POLARITY)
 MAX_EXTRA_DELAY_S = 1.0

@@ -19,9 +19,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from harness.errors import ModelError
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, acceleration_maps
-from harness.model.hydraulics import pack_rig
+from harness.model.hydraulics import BASE_PINNED, pack_rig
 from harness.model.plant import Plant, TableMotion
 from harness.rig.truth import true_hydraulics
 
@@ -81,6 +82,13 @@ class TablePlant:
         self._floor_map = np.ascontiguousarray(floor_map[:3])
         self._size = model.size
         self._floor_acc = np.zeros(3)
+        #: The plant couples the rig's hydraulics (packed rig parameters): only then can its bearings seize.
+        self.can_seize = self.rig_params is not None and self.rig_params.size > BASE_PINNED
+        self._pinned_by_profile = float(self.rig_params[BASE_PINNED]) if self.can_seize else 0.0
+        #: The bearings are seized (the ``seize`` fault): the base mat moves with the table.
+        self.seized = False
+        #: The sliding velocity the last seize stopped (m/s; NaN before any).
+        self.seized_at_velocity_m_s = float("nan")
         self.reset()
 
     def reset(self) -> None:
@@ -94,6 +102,35 @@ class TablePlant:
         self._held_time_s = 0.0
         self._input = 0.0
         self.started = False
+        self.set_seized(False)
+
+    def set_seized(self, seized: bool) -> None:
+        """Seize the bearings (the sliding stops at once) or free them again; nothing while unchanged.
+
+        A seize is a stop: the base mat takes the table's velocity at once (the floors keep their
+        own, so the first story's drift rate takes the step) and from then on moves with the table,
+        as the pinned base mat of the rig's kernel (SPEC 7a, 7b; ``rig.base_pinned``). The control
+        actuator's piston, which strokes at the sliding velocity, is blocked while it strokes.
+
+        Raises
+        ------
+        ModelError
+            If the plant has no rig parameters (a force-source actuator on a motion-source table).
+        """
+        if seized == self.seized:
+            return
+        params = self.rig_params
+        if not self.can_seize:
+            raise ModelError("a seized bearing needs the rig's coupled plant: a servo-hydraulic actuator or table")
+        if seized:
+            y = self.live.y
+            _, table_velocity = self.live.table_now(self.time_s)
+            step = y[self._i_vb] - table_velocity
+            y[self._i_vb] = table_velocity
+            self.seized_at_velocity_m_s = float(step)
+            y[self._size // 2] += step  # xdot_1 = (floor 1 - base mat)': floor 1 keeps its velocity
+        params[BASE_PINNED] = 1.0 if seized else self._pinned_by_profile
+        self.seized = seized
 
     @property
     def y(self) -> np.ndarray:

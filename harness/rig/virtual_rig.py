@@ -43,6 +43,7 @@ from harness.rig.faults import (
     ESTOP,
     MAX_EXTRA_DELAY_S,
     PRESSURE_LOST,
+    SEIZE,
     FaultSet,
     schedule_from,
 )
@@ -200,6 +201,8 @@ class VirtualRig:
     def _update_faults(self) -> None:
         self.faults.update(self.table.record_time_s if self.table.started else None)
         self.sensors.set_delays(self.faults.extra_delay_s, self.n_sub if self.lockstep else None)
+        if self.table.can_seize:  # a force source on a motion-source table has no coupled plant to seize
+            self.table.set_seized(self.faults.is_on(SEIZE))
 
     def _injected_drive_code(self) -> int:
         """The fault code of an injected drive fault present now (0: none)."""

@@ -30,6 +30,7 @@ from harness.errors import ModelError
 from harness.loop.ending import run_ending
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
+from harness.rig.faults import SEIZE, FaultSet, schedule_from
 from harness.rig.parts import RigParts
 from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
 from harness.rig.table import TablePlant
@@ -54,7 +55,7 @@ _HELD = tuple(name for name in _RECORDED if name != layout.FORCE_MEASURED)
 def run_rig_twin(
     profile: Profile, motion, rate_hz: float, controller: Controller, seed: int | None = None, asynchronous_delay_s: float = 0.0,
     story_rate_hz: float | None = None, lockstep: bool = False, duration_s: float | None = None,
-    offline_true_state: bool = False, compensator: Compensator | None = None,
+    offline_true_state: bool = False, compensator: Compensator | None = None, after_trip_s: float = 0.0,
 ) -> CaseResult:
     """Simulate the controlled case through the rig's sensor, actuator and safety models.
 
@@ -90,6 +91,11 @@ def run_rig_twin(
     compensator : Compensator, optional
         Between the controller's force and the supervisor, as in the loop's tick; default the
         profile's ``control.compensation`` (:func:`harness.control.factory.make_compensator`).
+    after_trip_s : float
+        After a trip, the rig goes on this long (s) under the tripped command (zero force, drive
+        disabled), recorded like the rest, as the virtual rig's plant goes on after a dry run
+        trips: what the load cell carries while the drive lets go (e.g. a seized base mat). 0
+        (default) ends the case at the trip.
 
     Returns
     -------
@@ -127,7 +133,7 @@ def run_rig_twin(
     story_every = max(1, int(round(rate_hz / story_rate)))
     true_state = profile.structure.n_stories * 2 + 2 if offline_true_state else 0
     samples.run(rig.table, _twin_sample(rig, controller, compensator, estimator, supervisor, health, samples.values, period,
-                                        story_every, true_state))
+                                        story_every, true_state, int(round(after_trip_s / period))))
     samples.close(rig.table.y, ending={layout.FORCE_MEASURED: rig.actuator.force_N}, held=_HELD)
     result = _twin_result(rig, samples, period, supervisor, profile.structure.total_weight_N, started)
     result.extra["state_source"] = "true plant state (offline design study)" if offline_true_state else "measured"
@@ -163,6 +169,8 @@ class _TwinRig:
         self.sensors = SensorModel(rig.sensors, self.substep_s, _MAX_SENSOR_DELAY_S, rng)
         self.sensors.set_delays(asynchronous_delay_s, self.substeps_per_sample if lockstep else None)
         self.actuator = make_actuator(rig, self.substep_s, self.table, seed)
+        #: The profile's scheduled faults (``rig.faults``): the twin has no bus, so it acts on the plant's only (seize).
+        self.faults = FaultSet(schedule_from(rig.faults))
         self.truth = np.zeros(len(SIGNALS))
         #: The latest reading of each sensor message (SI, DBC signal order); story readings hold between their samples.
         self.readings = tuple([0.0] * len(columns) for columns in MESSAGE_COLUMNS)
@@ -185,6 +193,9 @@ class _TwinRig:
         """Advance actuator, plant and sensors over one sample from ``t`` (s), sub-step by sub-step."""
         h, actuator, table, sensors, truth = self.substep_s, self.actuator, self.table, self.sensors, self.truth
         for j in range(self.substeps_per_sample):
+            if self.faults.schedule:  # as the virtual rig's fault schedule, on record time, each sub-step
+                self.faults.update(t + j * h)
+                table.set_seized(self.faults.is_on(SEIZE))
             plant_input = actuator.plant_input(actuator.substep(command.force_N, command.enable))
             table.advance(t + j * h, h, plant_input)
             table.truth(truth, plant_input)
@@ -195,10 +206,12 @@ class _TwinRig:
 def _twin_sample(
     rig: _TwinRig, controller: Controller, compensator: Compensator, estimator: FrictionEstimator, supervisor: Supervisor,
     health: TickHealth, values: dict[str, np.ndarray], period: float, story_every: int, true_state: int = 0,
+    after_trip_samples: int = 0,
 ) -> Callable[[int], bool]:
     """One controller sample of the twin: read the sensors, estimate, control, compensate, supervise, record, advance.
 
-    The returned ``sample(k)`` is False when the supervisor tripped (the case ends there).
+    The returned ``sample(k)`` is False when the supervisor tripped ``after_trip_samples`` samples
+    ago (the case ends there; the rig advances under the tripped command until then).
     ``true_state`` > 0 hands the controller the first ``true_state`` entries of the plant's
     true state (Z, an offline design study); 0 hands it None, as on a rig.
     """
@@ -212,6 +225,7 @@ def _twin_sample(
     sliding_variable, friction_estimate = values[layout.SLIDING_VARIABLE], values[layout.FRICTION_ESTIMATE]
     raw_force, command_force = values[layout.FORCE_RAW], values[layout.FORCE_COMMAND]
     actuator_force = values[layout.FORCE_MEASURED]
+    tripped_at = [-1]  # the sample of the trip
 
     def sample(k: int) -> bool:
         t = k * period
@@ -228,7 +242,10 @@ def _twin_sample(
         raw_force[k], command_force[k] = raw, command.force_N
         sliding_variable[k], friction_estimate[k] = controller.sliding_variable, friction
         if supervisor.state is State.TRIPPED:
-            return False
+            if tripped_at[0] < 0:
+                tripped_at[0] = k
+            if k - tripped_at[0] >= after_trip_samples:
+                return False
         rig.advance(t, command)
         return True
 
@@ -247,8 +264,11 @@ def _twin_result(
     columns.update({name: true_columns[name] for name in layout.BEARING})
     columns.update(samples.columns(layout.TWIN_CONTROL))
     ending = run_ending(supervisor, record_ended=True)  # as a dry run's: a check's safe stop is "stopped", with the check's name
-    extra = {"outcome": ending.outcome, "trip_reason": ending.reason,
-             "true_peaks": peak_responses(true_columns, total_weight_N)}
+    extra: dict[str, object] = {
+        "outcome": ending.outcome, "trip_reason": ending.reason, "true_peaks": peak_responses(true_columns, total_weight_N),
+    }
+    if rig.table.seized:  # a seize fault (rig.faults): the sliding velocity it stopped
+        extra["seized_at_velocity_m_s"] = rig.table.seized_at_velocity_m_s
     return case_result("rig twin", columns, total_weight_N, plant.steps + rig.substeps, started_s, extra)
 
 

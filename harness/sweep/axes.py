@@ -100,11 +100,13 @@ def _checked(base: BaseProfile, overrides: tuple[str, ...], study: Study, key_pa
 
 
 def _set_axis(base: BaseProfile, study: Study, key: str, values: Sequence[Any]) -> list[Point]:
+    """A ``set`` axis; a key of several key paths joined by commas sets each of them to the axis's value."""
+    keys = tuple(part.strip() for part in key.split(","))
     points = []
     for i, value in enumerate(values):
-        item = override(key, value)
-        profile = _checked(base, (item,), study, f"axes.set.{key}[{i}]", f"found {value!r}")
-        points.append(Point((item,), ((key, column_value(value_at(profile, key))),)))
+        items = tuple(override(part, value) for part in keys)
+        profile = _checked(base, items, study, f"axes.set.{key}[{i}]", f"found {value!r}")
+        points.append(Point(items, tuple((part, column_value(value_at(profile, part))) for part in keys)))
     return points
 
 

@@ -21,9 +21,11 @@ reported with the file, the key path, what was found and what was expected. Exam
       scale: {structure.story_stiffness_N_per_m: {kind: normal, mean: 1.0, std: 0.1}}
 
 The values of a ``set`` axis replace the profile's value at the key (units allowed, as in
-``--set``); a ``scale`` axis multiplies the profile's value (every element of a list) by a
-factor. What each axis value does to the profile is checked when the study is expanded
-(:mod:`harness.sweep.cases`).
+``--set``); a key of several key paths joined by commas sets each of them to the same value
+(one axis, e.g. a servo controller's feed-forward gain and the gain the safety checks expect:
+``rig.actuator.hydraulics.feedforward.gain,safety.force.velocity_feedforward_gain: [0, 1]``); a
+``scale`` axis multiplies the profile's value (every element of a list) by a factor. What each
+axis value does to the profile is checked when the study is expanded (:mod:`harness.sweep.cases`).
 """
 
 from __future__ import annotations

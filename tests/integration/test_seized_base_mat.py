@@ -123,3 +123,52 @@ def test_the_load_cell_limit_trips_a_seize_that_carries_the_load_cell_beyond_it(
     health.measured_force_N = peak
     n = round(FORCE.load_cell_limit_time_s / PERIOD_S)
     assert [det.update(k * PERIOD_S, PERIOD_S, health) for k in range(n + 1)][-1]
+
+
+# ---------------------------------------------------------------- the same case on the rig twin
+#: The default dry run's record (synthetic, 0.34 g), 12 s: long enough to hold its peak sliding velocity.
+TWIN_DURATION_S = 12.0
+#: What the twin runs on after the seize; the drive's pressure decays in rig.drive.decay_time_constant_s (20 ms).
+AFTER_SEIZE_S = 0.2
+TWIN_CASES = {
+    # the shipped rig: its servo controller's feed-forward, no harness compensation
+    "rig_feedforward": [],
+    # a plain loop with the harness's model compensation (its flow term bounded by max_flow_term_N)
+    "plain_loop_model": ["rig.actuator.hydraulics.feedforward.gain=0", "safety.force.velocity_feedforward_gain=0",
+                         "control.compensation=model"],
+}
+
+
+def _twin(overrides: list[str], duration_s: float, after_trip_s: float = 0.0):
+    from harness.control.factory import build_controller_for_rig
+    from harness.runs.options import prepare_motion
+    from harness.simulation.twin import run_rig_twin
+
+    profile = load_profile(overrides=[f"record.duration_s={TWIN_DURATION_S}", *overrides])
+    return run_rig_twin(profile, prepare_motion(profile), profile.control.rate_hz, build_controller_for_rig(profile, "phi"),
+                        duration_s=duration_s, after_trip_s=after_trip_s)
+
+
+@pytest.mark.parametrize("case", sorted(TWIN_CASES))
+def test_a_base_mat_seized_at_peak_sliding_velocity_on_the_twin_keeps_the_load_cell_within_the_derived_bound(case: str):
+    """The whole loop on the rig twin: the phi controller drives the base mat, the bearings seize (``rig.faults``
+    kind ``seize``) at the record's peak sliding velocity, and the load cell's peak after it is held to the
+    bound of docs/SAFETY.md for the command the harness was sending; beyond ``load_cell_limit_N`` it must trip."""
+    overrides = TWIN_CASES[case]
+    free = _twin(overrides, TWIN_DURATION_S)
+    sliding = free.columns["sliding_velocity_m_s"]
+    peak_at = int(np.argmax(np.abs(sliding)))
+    seize_s = float(free.columns["t_s"][peak_at]) - SENSOR_DELAY_S  # the reading is the sensor's delay old
+    seized = _twin([*overrides, f"rig.faults=[{{kind: seize, start_s: {seize_s!r}}}]"], seize_s + AFTER_SEIZE_S,
+                   after_trip_s=AFTER_SEIZE_S)
+    velocity = abs(seized.extra["seized_at_velocity_m_s"])
+    assert velocity > 0.5 * abs(sliding[peak_at])  # the seize stopped the base mat near its peak velocity
+    times, load_cell = seized.columns["t_s"], np.abs(seized.columns["force_measured_N"])
+    before, after = load_cell[times < seize_s][-1], load_cell[times >= seize_s]
+    gain = HYDRAULICS.feedforward.gain if not overrides else 0.0
+    flow = HYDRAULICS.loop_damping_Ns_per_m() if "control.compensation=model" in overrides else 0.0
+    bound = transient_bound_N(velocity, gain, flow)
+    assert after.max() > before  # the blocked piston does load the cell
+    assert after.max() <= bound, f"{case}: peak {after.max():.0f} N at {velocity:.3f} m/s, bound {bound:.0f} N"
+    if after.max() > FORCE.load_cell_limit_N + 1.0:  # held beyond it for load_cell_limit_time_s: the check trips
+        assert seized.extra["outcome"] == "tripped"

@@ -46,7 +46,7 @@ def test_every_row_of_the_docstring_table_decodes_to_its_kind():
             assert decode_fault_id(int(base)) == (F.KINDS.index(kind), 0)
 
 
-@pytest.mark.parametrize("bad", [1, 9, 24, 34, 56, 81, 134, 144, 150, 255])  # 130-133: sign_flip, 140-143: polarity
+@pytest.mark.parametrize("bad", [1, 9, 24, 34, 56, 81, 134, 144, 151, 255])  # 130-133: sign_flip, 140-143: polarity; 150: seize
 def test_unknown_fault_ids_are_refused(bad):
     with pytest.raises(FaultError, match=f"unknown fault id {bad}"):
         decode_fault_id(bad)
