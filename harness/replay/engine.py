@@ -11,13 +11,14 @@ is written: the tick has no recorder (its events are kept in memory) and no cons
 from __future__ import annotations
 
 import dataclasses
+import gc
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from harness.loop.tick_log import TickLog
+from harness.loop.tick_log import DT, MISSED, STALL, TickLog
 from harness.profile import Profile
 from harness.replay.feed import RecordEnded, ReplayBus, ReplayFeed
 from harness.replay.recorded import RecordedRun, ReplayRefused
@@ -80,14 +81,17 @@ class _Observer(TickLog):
     def start(self) -> None:
         """Nothing to mark: the replay's frames start with the first tick."""
 
-    def note(self, t, dt, lateness_s, stall_s, missed, operator_stop, operator_trip, bus_gone) -> None:  # type: ignore[override]
-        from harness.loop.tick_log import DT, MISSED, STALL
-
+    def note(
+        self, t: float, dt: float, lateness_s: float, stall_s: float, missed: int, operator_stop: bool,
+        operator_trip: bool, bus_gone: bool,
+    ) -> None:
+        """Keep the replayed tick; note where the loop's own dt, stall or missed periods differ from the recorded ones."""
         k = len(self.ticks)
         record = self.recorded[k]
-        for name, value, at in (("dt_s", dt, DT), ("stall_s", stall_s, STALL), ("missed_periods", missed, MISSED)):
-            if not _same(float(value), float(record[at])):
-                self.differences.append((k, f"{name} {value!r} replayed, {float(record[at])!r} recorded"))
+        if not (dt == record[DT] and stall_s == record[STALL] and missed == record[MISSED]):
+            for name, value, at in (("dt_s", dt, DT), ("stall_s", stall_s, STALL), ("missed_periods", missed, MISSED)):
+                if not _same(float(value), float(record[at])):
+                    self.differences.append((k, f"{name} {value!r} replayed, {float(record[at])!r} recorded"))
         state, reason = self.loop_state()
         self.ticks.append(ReplayedTick(t, dt, lateness_s, stall_s, int(missed), len(self.bus.sent), state, reason))
 
@@ -172,7 +176,10 @@ def run_replay(recorded: RecordedRun, profile: Profile) -> ReplayResult:
     feed = ReplayFeed(recorded.ticks, recorded.loop_start_frame, bus, reader, period_s)
     feed.before_loop()
     observer = _Observer(recorded.ticks, bus, lambda: (int(supervisor.command.state), supervisor.command.trip_reason))
-    realtime = dataclasses.replace(profile.loop.realtime, fifo_priority=0, cpu_affinity=(), lock_memory=False)
+    # nothing of the host's real time: no priority, no pinning, no locked memory; the collector is kept off
+    # below without the full collection the loop's start makes (it costs half a second on the frames held)
+    realtime = dataclasses.replace(profile.loop.realtime, fifo_priority=0, cpu_affinity=(), lock_memory=False,
+                                   disable_gc=False)
     loop_config = dataclasses.replace(profile.loop, realtime=realtime)
     run_is_linked = recorded.metadata.get("kind") == "run" and table is not None
     loop = ControlLoop(tick, loop_config, rate_hz, duration_s, feed.lockstep_wait if recorded.lockstep else None,
@@ -182,6 +189,8 @@ def run_replay(recorded: RecordedRun, profile: Profile) -> ReplayResult:
     loop.scheduler = feed  # type: ignore[assignment]
     feed.loop = loop
     record_ended = False
+    collecting = gc.isenabled()
+    gc.disable()
     try:
         result = loop.run()
         outcome, trip_reason = result.outcome, result.trip_reason
@@ -191,6 +200,9 @@ def run_replay(recorded: RecordedRun, profile: Profile) -> ReplayResult:
         record_ended = True
         last = observer.ticks[-1] if observer.ticks else None
         outcome, trip_reason = "incomplete", last.trip_reason if last is not None else ""
+    finally:
+        if collecting:
+            gc.enable()
     return ReplayResult(observer.ticks, bus.sent, keeper.events, outcome, trip_reason, record_ended, observer.differences)
 
 
