@@ -20,7 +20,7 @@ import numpy as np
 
 from harness.loop.tick_log import DT, MISSED, STALL, TickLog
 from harness.profile import Profile
-from harness.replay.feed import RecordEnded, ReplayBus, ReplayFeed
+from harness.replay.feed import RecordedRequests, RecordEnded, ReplayBus, ReplayFeed
 from harness.replay.recorded import RecordedRun, ReplayRefused
 
 
@@ -187,6 +187,7 @@ def run_replay(recorded: RecordedRun, profile: Profile) -> ReplayResult:
                        table_running=table.running if run_is_linked and table is not None else None,
                        scheduling=Scheduling(asked=0), tick_log=observer)
     loop.scheduler = feed  # type: ignore[assignment]
+    loop.signals = RecordedRequests()  # type: ignore[assignment]
     feed.loop = loop
     record_ended = False
     collecting = gc.isenabled()

@@ -29,6 +29,24 @@ class RecordEnded(BaseException):  # noqa: N818 - not an error: the recorded inp
     does not take it for a fault of its own)."""
 
 
+class RecordedRequests:
+    """The operator's requests as the run recorded them, in place of the loop's signal handlers.
+
+    The replay installs no handler: a Ctrl-C during a replay ends the command as any other, and a
+    request the run recorded is not handed on to the command line when the replayed loop ends.
+    """
+
+    def __init__(self) -> None:
+        self.stop_requested = False
+        self.trip_requested = False
+
+    def install(self) -> None:
+        """No handler: the requests come from the record."""
+
+    def restore(self) -> None:
+        """Nothing was installed."""
+
+
 class ReplayBus:
     """A bus that hands out the run's received frames one span of ``can.log`` at a time and keeps what is sent.
 
