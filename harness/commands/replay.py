@@ -12,14 +12,15 @@ from harness.commands.options import add_overrides, wrap
 
 EXAMPLES = """\
 examples:
-  harness replay logs/<run folder>                  exact: every command frame against the run's, bit for bit
-  harness replay logs/<run folder> --set safety.stroke.hard_limit_m=0.008
-                                                    what-if: would a tighter stroke bound have tripped, and when
-  harness replay logs/<run folder> --set control.compensation=model
+  harness replay logs/<RUN>          (exact: every frame compared bit for bit with the one the run sent)
+  harness replay logs/<RUN> --set safety.stroke.hard_limit_m=0.09
+      (what-if, open loop: would the tighter stroke bound have tripped, when and on what)
+  harness replay logs/<RUN> --set control.compensation=model
 
-exit status: 0 replayed identical (or a what-if replayed), 1 an exact replay that differs from the run
-(the first differing tick is printed: a non-determinism or a changed harness), 2 a run folder that cannot
-be replayed (logged before replay existed, incomplete, a kind replay does not cover)
+exit status: 0 replayed identical, or a what-if replayed; 1 an exact replay that differs from the
+run (the first differing tick is printed: a non-determinism in the tick, or other code than the
+run had); 2 a run folder that cannot be replayed (logged before replay existed, an incomplete
+record, a kind replay does not cover) or a change a what-if cannot apply
 """
 
 
