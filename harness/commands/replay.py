@@ -8,14 +8,15 @@ from rich.console import Console
 from rich.markup import escape
 
 from harness import exit_codes
-from harness.commands.options import add_overrides, wrap
+from harness.commands.options import add_overrides, output_dir, wrap
 
 EXAMPLES = """\
 examples:
   harness replay logs/<RUN>          (exact: every frame compared bit for bit with the one the run sent)
   harness replay logs/<RUN> --set safety.stroke.hard_limit_m=0.09
       (what-if, open loop: would the tighter stroke bound have tripped, when and on what)
-  harness replay logs/<RUN> --set control.compensation=model
+  harness replay logs/<RUN> --set control.compensation=model --out whatif/
+  harness report logs/<RUN> whatif/           (recorded and replayed overlaid)
 
 exit status: 0 replayed identical, or a what-if replayed; 1 an exact replay that differs from the
 run (the first differing tick is printed: a non-determinism in the tick, or other code than the
@@ -45,6 +46,9 @@ def add_parser(sub) -> None:
     )
     parser.add_argument("run_dir", metavar="RUN_DIR", help="a run folder of `harness dry-run` or `harness run`")
     add_overrides(parser, "safety.stroke.hard_limit_m=0.008")
+    parser.add_argument("--out", type=output_dir, metavar="DIR",
+                        help="also write the replayed ticks as a run folder in DIR (signals and events), so that "
+                        "`harness report RUN_DIR DIR` overlays recorded and replayed")
     parser.add_argument("--quiet", action="store_true", help="print the first line and the outcome only")
     parser.set_defaults(handler=run)
 
@@ -52,8 +56,10 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace, console: Console) -> int:
     from harness.replay.run import replay
 
-    output = replay(args.run_dir, tuple(args.overrides), args.overlay, args.variant)
+    output = replay(args.run_dir, tuple(args.overrides), args.overlay, args.variant, args.out)
     lines = output.lines if not args.quiet else [output.lines[0], *(line for line in output.lines if "outcome" in line)]
+    if args.quiet and args.out:
+        lines.append(output.lines[-1])
     for line in lines:
         console.print(escape(line), highlight=False, soft_wrap=True)
     if not args.quiet:

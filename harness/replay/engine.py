@@ -16,6 +16,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from pathlib import Path
+
 import numpy as np
 
 from harness.loop.tick_log import DT, MISSED, STALL, TickLog
@@ -52,20 +54,24 @@ class ReplayResult:
     record_ended: bool = False
     #: The replay's own figures that differ from the recorded ones (dt, stall, missed periods): (tick, what).
     figure_differences: list[tuple[int, str]] = field(default_factory=list)
+    #: The run folder ``--out`` wrote (None without it).
+    out_path: Path | None = None
 
 
 class _EventKeeper:
-    """The tick's recorder in a replay: rows go nowhere, events are kept."""
+    """The tick's recorder in a replay: events are kept for the comparison; rows and events also go to a
+    run folder when one is given (``--out``)."""
 
-    def __init__(self) -> None:
+    def __init__(self, folder: Any = None) -> None:
         self.events: list[tuple[float, str, str, str]] = []
+        self.folder = folder
 
     def record_row(self, values: np.ndarray) -> bool:
-        return True
+        return self.folder.record_row(values) if self.folder is not None else True
 
     def record_event(self, t: float, kind: str, name: str, detail: str) -> bool:
         self.events.append((t, kind, name, detail))
-        return True
+        return self.folder.record_event(t, kind, name, detail) if self.folder is not None else True
 
 
 class _Observer(TickLog):
@@ -121,8 +127,13 @@ def replay_profile(recorded: RecordedRun, overrides: tuple[str, ...] = (), overl
     return Profile.from_resolved(data)
 
 
-def run_replay(recorded: RecordedRun, profile: Profile) -> ReplayResult:
+def run_replay(recorded: RecordedRun, profile: Profile, out_dir: Path | None = None,
+               changes: tuple[str, ...] = ()) -> ReplayResult:
     """Run ``recorded``'s ticks through the loop built from ``profile``.
+
+    ``out_dir``: write the replayed ticks' rows and events there as a run folder (its ``signals.csv``
+    and ``events.jsonl``, no CAN log), for ``harness report RUN_DIR out_dir``; ``changes`` name what a
+    what-if changed (its metadata).
 
     Raises
     ------
@@ -168,7 +179,7 @@ def run_replay(recorded: RecordedRun, profile: Profile) -> ReplayResult:
     table = _table_link(recorded)
     if table is not None:
         table.attach(link)
-    keeper = _EventKeeper()
+    keeper = _EventKeeper(_out_folder(out_dir, recorded, profile, changes) if out_dir is not None else None)
     heartbeat_every = max(1, round(rate_hz / can_config.heartbeat_rate_hz))
     estop_every = max(1, round(rate_hz / can_config.estop_rate_hz))
     tick = ControlTick(link, controller, estimator, supervisor, keeper, heartbeat_every, estop_every,
@@ -204,7 +215,39 @@ def run_replay(recorded: RecordedRun, profile: Profile) -> ReplayResult:
     finally:
         if collecting:
             gc.enable()
-    return ReplayResult(observer.ticks, bus.sent, keeper.events, outcome, trip_reason, record_ended, observer.differences)
+        if keeper.folder is not None:
+            keeper.folder.finish("stopped" if record_ended else outcome if outcome in _OUTCOMES else "error",
+                                 trip_reason=trip_reason or None,
+                                 summary={"record_start_t_s": _record_start(keeper.events)})
+    return ReplayResult(observer.ticks, bus.sent, keeper.events, outcome, trip_reason, record_ended, observer.differences,
+                        keeper.folder.path if keeper.folder is not None else None)
+
+
+_OUTCOMES = ("completed", "stopped", "tripped")
+#: What a replay's run folder takes over from the run's metadata (the rest describes the replay's own profile).
+_KEPT_METADATA = ("controller", "rate_hz", "lockstep", "record", "overlay", "table_link")
+
+
+def _out_folder(out_dir: Path, recorded: RecordedRun, profile: Profile, changes: tuple[str, ...]):
+    """The run folder a replay writes (``--out``): the replayed rows and events, described by its own metadata."""
+    from harness.recording import RunFolder
+    from harness.signals.columns import CONTROL_ROW
+
+    stroke, force = profile.safety.stroke, profile.safety.force
+    metadata = {key: recorded.metadata[key] for key in _KEPT_METADATA if key in recorded.metadata}
+    metadata.update(
+        total_weight_N=profile.structure.total_weight_N, stroke_soft_limit_m=stroke.soft_limit_m,
+        stroke_hard_limit_m=stroke.hard_limit_m, force_limit_N=force.max_force_N,
+        replay_of=str(recorded.path), what_if=list(changes), open_loop=bool(changes),
+    )
+    kind = recorded.metadata.get("kind", "dry-run")
+    return RunFolder.create(out_dir, f"{profile.name}_replay", kind, profile.resolved_data(), CONTROL_ROW,
+                            metadata=metadata, with_can=False).start()
+
+
+def _record_start(events: list[tuple[float, str, str, str]]) -> float | None:
+    """Loop time the replayed run entered RUNNING (s), None if it did not."""
+    return next((t for t, kind, name, _ in events if kind == "state" and name == "RUNNING"), None)
 
 
 def _continue_counters(writer: Any, recorded: RecordedRun, protocol: Any) -> None:

@@ -32,8 +32,11 @@ class ReplayOutput:
 
 
 def replay(path: Path | str, overrides: tuple[str, ...] = (), overlay: str | None = None,
-           variant: str | None = None) -> ReplayOutput:
+           variant: str | None = None, out_dir: Path | str | None = None) -> ReplayOutput:
     """Replay the run folder ``path``: exactly without changes, open loop with them (what-if).
+
+    ``out_dir``: also write the replayed ticks there as a run folder (``harness report path out_dir``
+    overlays recorded and replayed).
 
     Raises
     ------
@@ -54,16 +57,21 @@ def replay(path: Path | str, overrides: tuple[str, ...] = (), overlay: str | Non
     profile = replay_profile(recorded, overrides, overlay, variant) if changed else run_profile
     if changed:
         _check_same_input(recorded.path, run_profile, profile)
-    result = run_replay(recorded, profile)
+    changes = tuple([*(f"--overlay {overlay}" for _ in [overlay] if overlay), *(f"--set {item}" for item in overrides)])
+    result = run_replay(recorded, profile, Path(out_dir) if out_dir is not None else None, changes)
     protocol, _ = prepare(profile.can)
     span_s = float(recorded.ticks[-1, 0] - recorded.ticks[0, 0]) if len(recorded.ticks) else 0.0
     if not changed:
         report = exact_report(recorded, result)
-        lines = exact_lines(report, recorded, protocol)
+        lines = exact_lines(report, recorded, protocol) + _written(result.out_path)
         return ReplayOutput(lines, report.identical_run, time.perf_counter() - started, span_s, len(result.ticks))
-    changes = [*(f"--overlay {overlay}" for _ in [overlay] if overlay), *(f"--set {item}" for item in overrides)]
-    lines = whatif_lines(whatif_report(recorded, result, protocol), changes)
+    lines = whatif_lines(whatif_report(recorded, result, protocol), changes) + _written(result.out_path)
     return ReplayOutput(lines, None, time.perf_counter() - started, span_s, len(result.ticks))
+
+
+def _written(out_path: Path | None) -> list[str]:
+    """The line naming the replayed run folder ``--out`` wrote (none without ``--out``)."""
+    return [f"replayed signals written to {out_path}"] if out_path is not None else []
 
 
 def _check_same_input(path: Path, run_profile, profile) -> None:

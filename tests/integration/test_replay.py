@@ -146,11 +146,11 @@ def test_a_real_time_dry_run_that_rides_through_a_stall_replays_bit_for_bit(tmp_
     assert f"recorded outcome: {outcome}" in out and f"replayed outcome: {outcome}" in out
 
 
-def test_a_tighter_stroke_bound_reports_the_earlier_trip_it_would_have_caused(completed, capsys):
+def test_a_tighter_stroke_bound_reports_the_earlier_trip_it_would_have_caused(completed, capsys, tmp_path):
     hard_m, stop_time_s = 0.012, 0.05
     status, out = _replay(capsys, completed, "--set", "safety.stroke.soft_limit_m=0.008", "--set",
                           "safety.stroke.fade_band_m=0.002", "--set", f"safety.stroke.hard_limit_m={hard_m}",
-                          "--set", f"safety.stroke.stop_time_s={stop_time_s}")
+                          "--set", f"safety.stroke.stop_time_s={stop_time_s}", "--out", str(tmp_path / "whatif"))
     assert status == exit_codes.OK, out
     assert "OPEN LOOP" in out and "the rig did not answer the changed commands" in out
     trip = re.search(r"what-if outcome: tripped \((stroke_\w+)\) at t = ([0-9.]+) s", out)
@@ -168,6 +168,13 @@ def test_a_tighter_stroke_bound_reports_the_earlier_trip_it_would_have_caused(co
     assert f"would have tripped on {trip.group(1)} at t = {trip.group(2)} s, where the run did not" in out
     first = re.search(r"commands first differ at tick (\d+) \(t = ([0-9.]+) s\)", out)
     assert first is not None and float(first.group(2)) <= float(trip.group(2)), out
+    # --out: the replayed ticks as a run folder that harness report reads beside the run
+    (written,) = (tmp_path / "whatif").iterdir()
+    replayed = load_run(written)
+    ticks = int(re.search(r"replayed (\d+) ticks", out).group(1))
+    assert len(replayed["t_s"]) == ticks and replayed.metadata["open_loop"] is True
+    assert replayed.metadata["outcome"] == "tripped" and replayed.metadata["trip_reason"] == trip.group(1)
+    np.testing.assert_array_equal(replayed["t_s"], t[:ticks])
 
 
 def test_a_run_logged_before_replay_existed_is_refused(completed, tmp_path, capsys):
