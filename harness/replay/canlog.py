@@ -69,7 +69,7 @@ def read_can_log(path: Path) -> list[LoggedFrame]:
 
 def _frame(line: str) -> LoggedFrame:
     parts = line.split()
-    timestamp = float(parts[0][1:-1])
+    timestamp = float(parts[0][1:-1])  # not used by the replay's reader (receive times are the poll's); kept for reading
     ident, hash_, payload = parts[2].partition("#")
     if not hash_:
         raise ValueError("no '#'")
