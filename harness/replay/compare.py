@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from harness.loop.tick_log import CAN_FRAMES, T
 from harness.replay.engine import ReplayResult
 from harness.replay.recorded import RecordedRun
 
@@ -57,7 +58,7 @@ def replayed_outcome(result: ReplayResult) -> Outcome:
 def recorded_sent(recorded: RecordedRun) -> tuple[list[list[tuple[int, bytes]]], list[tuple[int, bytes]]]:
     """The frames the run sent in each tick, and after its last tick (the closing disable)."""
     frames = recorded.frames
-    bounds = [recorded.loop_start_frame, *(int(b) for b in recorded.ticks[:, -1])]
+    bounds = [recorded.loop_start_frame, *(int(b) for b in recorded.ticks[:, CAN_FRAMES])]
     per_tick = [[(f.arbitration_id, f.data) for f in frames[a:b] if not f.rx] for a, b in zip(bounds, bounds[1:], strict=False)]
     after = [(f.arbitration_id, f.data) for f in frames[bounds[-1]:] if not f.rx]
     return per_tick, after
@@ -150,7 +151,7 @@ def exact_lines(report: ExactReport, recorded: RecordedRun, protocol: Any) -> li
     lines.append(f"replayed {report.replayed_ticks} ticks of {report.recorded_ticks}: {report.identical} identical")
     if report.first_difference is not None:
         k, run_frames, replay_frames = report.first_difference
-        t = float(recorded.ticks[k, 0]) if k < len(recorded.ticks) else math.nan
+        t = float(recorded.ticks[k, T]) if k < len(recorded.ticks) else math.nan
         lines.append(f"first differing tick: {k} (t = {t:.4f} s)")
         lines += [f"  run sent:    {describe_frame(protocol, f)}" for f in run_frames] or ["  run sent:    nothing"]
         lines += [f"  replay sent: {describe_frame(protocol, f)}" for f in replay_frames] or ["  replay sent: nothing"]
@@ -204,7 +205,7 @@ def whatif_report(recorded: RecordedRun, result: ReplayResult, protocol: Any) ->
     for k, (a, b) in enumerate(zip(run_commands, replay_commands, strict=False)):
         if a == b:
             continue
-        t = float(recorded.ticks[k, 0])
+        t = float(recorded.ticks[k, T])
         if first is None:
             first = (k, t, a or (math.nan, math.nan), b or (math.nan, math.nan))
         if a is not None and b is not None and abs(b[0] - a[0]) > largest[0]:

@@ -14,9 +14,8 @@ import dataclasses
 import gc
 import math
 from dataclasses import dataclass, field
-from typing import Any
-
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -116,9 +115,7 @@ def replay_profile(recorded: RecordedRun, overrides: tuple[str, ...] = (), overl
         raise ReplayRefused("--variant names a variant of a profile file; the run's profile is already resolved: "
                             "give the variant's values with --set or --overlay")
     if overlay is not None:
-        from pathlib import Path
-
-        from harness.profile import _read_overlay
+        from harness.profile import _read_overlay  # read and checked as load_profile reads an overlay
 
         layer, _ = _read_overlay(Path(overlay))
         data = merge(data, layer)

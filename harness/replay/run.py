@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
+from harness.loop.tick_log import T
 from harness.replay.recorded import ReplayRefused, load_recorded
 
 
@@ -28,7 +29,6 @@ class ReplayOutput:
     seconds: float
     run_span_s: float
     ticks: int = 0
-    notes: list[str] = field(default_factory=list)
 
 
 def replay(path: Path | str, overrides: tuple[str, ...] = (), overlay: str | None = None,
@@ -57,10 +57,10 @@ def replay(path: Path | str, overrides: tuple[str, ...] = (), overlay: str | Non
     profile = replay_profile(recorded, overrides, overlay, variant) if changed else run_profile
     if changed:
         _check_same_input(recorded.path, run_profile, profile)
-    changes = tuple([*(f"--overlay {overlay}" for _ in [overlay] if overlay), *(f"--set {item}" for item in overrides)])
+    changes = tuple(([f"--overlay {overlay}"] if overlay else []) + [f"--set {item}" for item in overrides])
     result = run_replay(recorded, profile, Path(out_dir) if out_dir is not None else None, changes)
     protocol, _ = prepare(profile.can)
-    span_s = float(recorded.ticks[-1, 0] - recorded.ticks[0, 0]) if len(recorded.ticks) else 0.0
+    span_s = float(recorded.ticks[-1, T] - recorded.ticks[0, T]) if len(recorded.ticks) else 0.0
     if not changed:
         report = exact_report(recorded, result)
         lines = exact_lines(report, recorded, protocol) + _written(result.out_path)
