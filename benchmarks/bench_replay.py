@@ -4,7 +4,8 @@ Makes one dry run (the default profile and record, 30 s of record, lockstep unle
 then replays it ``--repeats`` times in this process and reports, side by side in one run: the
 replay's wall time (median and each), split into reading the run folder and running the ticks;
 the run's loop time (first tick to last) and its wall-clock duration (metadata start to end); the
-ratios; the replay's time per tick beside the run's own tick compute time (the ``compute_s``
+ratios; the replay's CPU time (the process's, less sensitive to a loaded machine than its wall
+time); the replay's time per tick beside the run's own tick compute time (the ``compute_s``
 column, median). Each replay must give every tick back identical, or the script says so.
 
     .venv/bin/python benchmarks/bench_replay.py                 # 30 s lockstep dry run, 3 replays
@@ -42,14 +43,15 @@ def time_replay(folder: Path) -> dict:
     from harness.replay.engine import replay_profile, run_replay
     from harness.replay.recorded import load_recorded
 
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.process_time()
     recorded = load_recorded(folder)
     read = time.perf_counter()
     result = run_replay(recorded, replay_profile(recorded))
     ran = time.perf_counter()
     report = exact_report(recorded, result)
-    done = time.perf_counter()
+    done, cpu_done = time.perf_counter(), time.process_time()
     return {"read_s": read - started, "run_s": ran - read, "compare_s": done - ran, "total_s": done - started,
+            "cpu_s": cpu_done - cpu_started,
             "ticks": len(result.ticks), "identical": report.identical_run}
 
 
@@ -59,12 +61,13 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=30.0, help="seconds of record of the dry run made")
     parser.add_argument("--realtime", action="store_true", help="make a real-time dry run (default lockstep)")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--keep", type=Path, help="make the dry run's folder in this (empty) folder and keep it")
     args = parser.parse_args()
     from harness.model.warmup import warm_up
 
     warm_up()  # the compiled kernels are loaded once per process, as for any command
     with tempfile.TemporaryDirectory() as scratch:
-        folder = args.run or make_run(Path(scratch), args.duration, args.realtime)
+        folder = args.run or make_run(Path(args.keep) if args.keep else Path(scratch), args.duration, args.realtime)
         metadata = json.loads((folder / "metadata.json").read_text())
         ticks = np.fromfile(folder / "ticks.bin", "<f8").reshape(-1, len(metadata["tick_columns"]))[1:]
         loop_span_s = float(ticks[-1, 0] - ticks[0, 0])
@@ -80,7 +83,10 @@ def main() -> None:
         "run": str(folder), "lockstep": metadata.get("lockstep"), "ticks": n, "loop_span_s": loop_span_s,
         "run_wall_s": wall_s, "replay_total_s_median": total, "replay_loop_s_median": loop,
         "replay_total_s": [r["total_s"] for r in runs], "read_s_median": statistics.median(r["read_s"] for r in runs),
-        "replay_over_loop_span": total / loop_span_s, "replay_over_run_wall": total / wall_s,
+        "replay_cpu_s_median": statistics.median(r["cpu_s"] for r in runs),
+        "replay_over_loop_span": total / loop_span_s,
+        "replay_cpu_over_loop_span": statistics.median(r["cpu_s"] for r in runs) / loop_span_s,
+        "replay_over_run_wall": total / wall_s,
         "replay_per_tick_us": loop / n * 1e6, "run_compute_per_tick_us_median": compute_s * 1e6,
         "all_identical": all(r["identical"] for r in runs),
     }
