@@ -8,7 +8,7 @@ reader finds a command's whole path, from its options to its output, in its own 
 the parser from them and maps errors to exit statuses.
 """
 
-from harness.commands import dry_run, identify, records, report, rig, run, simulate, sweep
+from harness.commands import dry_run, identify, records, replay, report, rig, run, simulate, sweep
 
 #: The commands in the order ``harness --help`` lists them.
-COMMANDS = (dry_run, rig, run, identify, simulate, sweep, report, records)
+COMMANDS = (dry_run, rig, run, replay, identify, simulate, sweep, report, records)

@@ -22,6 +22,7 @@ from harness.loop.ending import run_ending
 from harness.loop.operator import OperatorSignals
 from harness.loop.status import LoopStatus
 from harness.loop.tick import ControlTick
+from harness.loop.tick_log import TickLog
 from harness.loop.timing import PHASE, GapTrace, TimingStats
 from harness.realtime.host import Scheduling, apply_realtime, restore_realtime
 from harness.realtime.scheduler import FixedRateScheduler
@@ -91,6 +92,9 @@ class ControlLoop:
         ``table.link: can``). Record time then counts from the first RUNNING tick that sees it; a
         table that does not report running within :data:`TABLE_START_TIMEOUT_S` stops the run
         safely. None: record time counts from RUNNING (the harness's own clock).
+    tick_log : TickLog, optional
+        Notes each tick's time, step, lateness, stall, missed deadlines, operator requests, the bus's
+        loss and the CAN log's length after it (:mod:`harness.loop.tick_log`), for ``harness replay``.
     """
 
     def __init__(
@@ -107,8 +111,11 @@ class ControlLoop:
         table_running: Callable[[], bool] | None = None,
         scheduling: Scheduling | None = None,
         recorder_error: Callable[[], BaseException | None] | None = None,
+        tick_log: TickLog | None = None,
     ):
         self.tick = tick
+        #: Notes what each tick was given, for ``harness replay`` (None: not recorded).
+        self.tick_log = tick_log
         #: ``recorder_error()``: the error that stopped the run folder's writer, or None (looked at every tick).
         self.recorder_error = recorder_error
         self._record_lost = False
@@ -286,6 +293,9 @@ class ControlLoop:
             previous_t = -self.period_s
             previous_woke = None
             t = 0.0
+            tick_log = self.tick_log
+            if tick_log is not None:
+                tick_log.start()
             try:
                 while True:
                     t, lateness = self._wait(k)
@@ -306,6 +316,9 @@ class ControlLoop:
                     run_started, armed_at, finished = self._phase(t, run_started, duration_s, armed_at)
                     self._update_status(t, run_started, duration_s, command, lateness)
                     self._gap_state = command.state  # the phase the next gap begins in
+                    if tick_log is not None:
+                        tick_log.note(t, dt, lateness, stall_s, missed, health.operator_stop, health.operator_trip,
+                                      health.bus_gone)
                     trace.mark(PHASE)
                     k += 1
                     if finished and finished_at is None:

@@ -17,6 +17,10 @@ A run folder (one per run, under ``logs/``) contains:
 ``can.log``
     Raw CAN traffic, candump ``-L`` format (:class:`can.CanutilsLogWriter`); only for
     runs that had a bus (``metadata["files"]["can"]`` is ``null`` otherwise).
+``ticks.bin``
+    The loop's tick record, what ``harness replay`` needs to run the ticks again
+    (:mod:`harness.loop.tick_log`): per tick ``len(metadata["tick_columns"])`` little-endian
+    float64 values, exact; only for runs of the control loop recorded since replay exists.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ PROFILE_FILE: Final = "profile.yaml"
 SIGNALS_FILE: Final = "signals.csv"
 EVENTS_FILE: Final = "events.jsonl"
 CAN_FILE: Final = "can.log"
+TICKS_FILE: Final = "ticks.bin"
 
 #: What produced a run folder.
 RunKind = Literal["dry-run", "run", "simulation"]

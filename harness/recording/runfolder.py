@@ -39,6 +39,7 @@ from harness.recording.layout import (
     METADATA_FILE,
     PROFILE_FILE,
     SIGNALS_FILE,
+    TICKS_FILE,
     Outcome,
     RunFolderError,
     RunKind,
@@ -97,6 +98,7 @@ class RunFolder:
         row_capacity: int = 8192,
         frame_capacity: int = 32768,
         flush_interval_s: float = 0.05,
+        tick_columns: Sequence[str] = (),
     ) -> RunFolder:
         """Create ``log_dir/<UTC start>_<profile>_<kind>/`` and its files; the writer is not started yet.
 
@@ -121,6 +123,9 @@ class RunFolder:
             Ring sizes (rows, frames) before the recorder drops.
         flush_interval_s : float
             Seconds between writer drains (s), at most 0.1.
+        tick_columns : sequence of str
+            The loop's tick record (:mod:`harness.loop.tick_log`), kept exact in ``ticks.bin`` for
+            ``harness replay``; empty for none (simulations).
 
         Raises
         ------
@@ -135,6 +140,9 @@ class RunFolder:
         path = _unique_folder(Path(log_dir), f"{started:%Y-%m-%dT%H-%M-%S}_{safe_name(profile_name)}_{kind}")
         keep_can = (kind != "simulation") if with_can is None else with_can
         data = _initial_metadata(profile_name, kind, names, started, keep_can, metadata or {})
+        if tick_columns:
+            data["files"]["ticks"] = TICKS_FILE
+            data["tick_columns"] = list(tick_columns)
         try:
             write_profile(path / PROFILE_FILE, resolved_profile_data)
             write_json_atomic(path / METADATA_FILE, data)
@@ -147,6 +155,8 @@ class RunFolder:
                 row_capacity=row_capacity,
                 frame_capacity=frame_capacity,
                 flush_interval_s=flush_interval_s,
+                ticks_name=TICKS_FILE if tick_columns else None,
+                tick_columns=len(tick_columns),
             )
         except OSError as err:  # a disk that filled after the check of its room: refused, nothing armed
             raise RunFolderError(f"cannot write the run folder ({type(err).__name__}: {err}), expected a disk with "
@@ -219,7 +229,7 @@ class RunFolder:
         texts = []
         if any(lost.values()) or status["error"]:
             parts = [f"{lost['rows']} of {lost['rows'] + status['rows_written']} rows"]
-            parts += [f"{lost[key]} {key}" for key in ("frames", "events") if lost[key]]
+            parts += [f"{lost[key]} {key}" for key in ("frames", "events", "ticks") if lost.get(key)]
             cause = status["error"] or "the recorder's queues were full"
             texts.append(f"lost {', '.join(parts)} ({cause})")
         if self.metadata_error is not None:
@@ -236,6 +246,7 @@ class RunFolder:
             "rows_written": writer.rows_written,
             "frames_written": writer.frames_written,
             "events_written": writer.events_written,
+            **({"ticks_written": writer.ticks_written} if writer.ticks is not None else {}),
             "dropped": writer.drops(),
             "lost": writer.lost(),
             "longest_hold_s": writer.longest_hold_s,
@@ -276,6 +287,15 @@ class RunFolder:
         """
         frames = self._writer.frames
         return frames.push_fields, frames.push_fields
+
+    def record_tick(self, values: np.ndarray) -> bool:
+        """Queue one tick record of the loop (:mod:`harness.loop.tick_log`); never blocks; False if dropped."""
+        return self._writer.record_tick(values)
+
+    @property
+    def frames_recorded(self) -> int:
+        """Frames handed to the CAN log so far (dropped ones not counted): the next frame's line in ``can.log``."""
+        return self._writer.frames.pushed
 
     def record_event(self, t: float | None, kind: str, name: str, detail: Any = None) -> bool:
         """Queue an event (``kind`` e.g. lifecycle/trip/warning/interlock); never blocks; False if dropped."""

@@ -24,7 +24,7 @@ import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, BinaryIO, TextIO
 
 import can
 import numpy as np
@@ -63,6 +63,11 @@ class RunWriter:
         Seconds between drains (s).
     fsync_interval_s : float
         Seconds between fsyncs (s); 0 fsyncs at every drain.
+    ticks_name : str or None
+        File name of the loop's tick record (what exact replay needs, :mod:`harness.loop.tick_log`):
+        ``tick_columns`` little-endian float64 values per tick, exact; None for none.
+    tick_columns : int
+        Values per tick record (with ``ticks_name``).
     """
 
     def __init__(
@@ -78,12 +83,16 @@ class RunWriter:
         event_capacity: int = 1024,
         flush_interval_s: float = 0.05,
         fsync_interval_s: float = 1.0,
+        ticks_name: str | None = None,
+        tick_columns: int = 0,
     ):
         if not 0.0 < flush_interval_s <= 0.1:
             raise ValueError(f"found flush_interval_s={flush_interval_s}, expected 0 < value <= 0.1 s")
         self.columns = columns
         self.rows = RowRing(len(columns), row_capacity)
         self.frames = FrameRing(frame_capacity)
+        #: The loop's tick record (None without one): bounded like the rows, written as exact binary.
+        self.ticks = RowRing(tick_columns, row_capacity) if ticks_name else None
         self._events: queue.Queue[tuple[Any, ...]] = queue.Queue(maxsize=event_capacity)
         self.events_dropped = 0
         self.events_accepted = 0
@@ -95,6 +104,7 @@ class RunWriter:
         self._signals.flush()
         self._event_file: TextIO = open(folder / events_name, "w", encoding="utf-8", newline="")
         self._can: can.CanutilsLogWriter | None = can.CanutilsLogWriter(folder / can_name) if can_name else None
+        self._ticks: BinaryIO | None = open(folder / ticks_name, "wb") if ticks_name else None  # noqa: SIM115 - closed in close()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"recorder-{folder.name}", daemon=True)
         self._lock = threading.Lock()
@@ -104,6 +114,7 @@ class RunWriter:
         self.rows_written = 0
         self.frames_written = 0
         self.events_written = 0
+        self.ticks_written = 0
         self.error: BaseException | None = None
         #: Longest CPU time the writer thread ran between two yields of the interpreter lock (s):
         #: an upper bound of how long it can keep the loop's thread waiting for the lock.
@@ -119,6 +130,11 @@ class RunWriter:
     def record_frame(self, msg: can.Message) -> bool:
         """Queue a sent or received CAN frame (its fields are copied); never blocks. False if dropped."""
         return self.frames.push(msg)
+
+    def record_tick(self, values: np.ndarray) -> bool:
+        """Queue one tick record (:mod:`harness.loop.tick_log`); never blocks. False if dropped (or none is kept)."""
+        ticks = self.ticks
+        return ticks.push(values) if ticks is not None else False
 
     def record_event(self, t: float | None, kind: str, name: str, detail: Any = None) -> bool:
         """Queue an event; never blocks. False if the event queue was full (the drop is counted).
@@ -155,7 +171,10 @@ class RunWriter:
 
     def drops(self) -> dict[str, int]:
         """Rows, frames and events dropped so far because a queue was full."""
-        return {"rows": self.rows.dropped, "frames": self.frames.dropped, "events": self.events_dropped}
+        drops = {"rows": self.rows.dropped, "frames": self.frames.dropped, "events": self.events_dropped}
+        if self.ticks is not None:
+            drops["ticks"] = self.ticks.dropped
+        return drops
 
     def lost(self) -> dict[str, int]:
         """Rows, frames and events handed to the recorder that are not (yet) confirmed in the files.
@@ -168,11 +187,14 @@ class RunWriter:
         only for a run with a CAN log.
         """
         frames = self.frames.pushed - self.frames_written + self.frames.dropped if self._can is not None else 0
-        return {
+        lost = {
             "rows": self.rows.pushed - self.rows_written + self.rows.dropped,
             "frames": frames,
             "events": self.events_accepted - self.events_written + self.events_dropped,
         }
+        if self.ticks is not None:
+            lost["ticks"] = self.ticks.pushed - self.ticks_written + self.ticks.dropped
+        return lost
 
     def _run(self) -> None:
         while not self._stop.wait(self.flush_interval_s):
@@ -207,6 +229,7 @@ class RunWriter:
                 return
             self._hold_started = time.thread_time()
             rows = self._write_rows()
+            ticks = self._write_ticks()
             frames = self._write_frames()
             self._report_drops()
             events = self._write_events()
@@ -214,6 +237,7 @@ class RunWriter:
             self._flush()
             self._yield_interpreter()
             self.rows_written += rows
+            self.ticks_written += ticks
             self.frames_written += frames if self._can is not None else 0
             self.events_written += events
 
@@ -226,6 +250,15 @@ class RunWriter:
             total += len(block)
             self._yield_interpreter()
         return total
+
+    def _write_ticks(self) -> int:
+        """Write the tick records pending now, exact (little-endian float64); return how many."""
+        ticks, handle = self.ticks, self._ticks
+        if ticks is None or handle is None or not ticks.pending:
+            return 0
+        block = ticks.drain()
+        handle.write(block.astype("<f8", copy=False).tobytes())
+        return len(block)
 
     def _write_frames(self) -> int:
         """Write the frames pending now in chunks, yielding the GIL between chunks; return how many."""
@@ -277,7 +310,8 @@ class RunWriter:
 
     def _flush(self) -> None:
         """Flush every file, and fsync them every ``fsync_interval_s``; both release the interpreter lock."""
-        handles = [self._signals, self._event_file] + ([self._can.file] if self._can is not None else [])
+        handles: list[Any] = [self._signals, self._event_file] + ([self._can.file] if self._can is not None else [])
+        handles += [self._ticks] if self._ticks is not None else []
         for handle in handles:
             handle.flush()
             self._restart_hold()
@@ -305,8 +339,9 @@ class RunWriter:
             self._drain_safely()
         with self._lock:
             self._closed = True
-            for handle in (self._signals, self._event_file):
-                _close_quietly(handle)
+            for handle in (self._signals, self._event_file, self._ticks):
+                if handle is not None:
+                    _close_quietly(handle)
             if self._can is not None:
                 try:
                     self._can.stop()
@@ -349,7 +384,7 @@ def _finite_or_none(value: float | None) -> float | None:
     return number if math.isfinite(number) else None
 
 
-def _close_quietly(handle: TextIO) -> None:
+def _close_quietly(handle: TextIO | BinaryIO) -> None:
     try:
         handle.flush()
         os.fsync(handle.fileno())

@@ -30,6 +30,7 @@ from harness.loop.runner import ArmTimeout, ControlLoop, LoopResult
 from harness.loop.status import LoopStatus
 from harness.loop.table_link import CanTableLink
 from harness.loop.tick import ControlTick
+from harness.loop.tick_log import TICK_COLUMNS, TickLog
 from harness.model.warmup import warm_up
 from harness.profile import Profile
 from harness.realtime.host import Scheduling, request_fifo, restore_scheduling
@@ -201,6 +202,24 @@ def _metadata(profile: Profile, settings: SessionSettings) -> dict:
     }
 
 
+#: The version of what a run folder keeps for ``harness replay`` (metadata ``replay``, ``ticks.bin``).
+REPLAY_FORMAT_VERSION = 1
+
+
+def _replay_facts(settings: SessionSettings, profile_controller: bool) -> dict:
+    """What ``harness replay`` needs besides the profile, the CAN log and the tick record.
+
+    ``profile_controller`` is False for an identification's excitation, which replay does not rebuild.
+    """
+    return {
+        "version": REPLAY_FORMAT_VERSION,
+        "duration_s": settings.duration_s,
+        "table_check": settings.table_record is not None,
+        "table_check_off": "" if settings.table_record is not None else settings.table_check_off,
+        "profile_controller": profile_controller,
+    }
+
+
 NO_PANEL_WARNING = (
     "safety.estop.panel_required is false: this run does not require a live E-stop panel; an unplugged panel "
     "cannot be told from one that is not pressed"
@@ -306,6 +325,7 @@ def run_session(
     warm_up()  # the estimator's kernel must not compile inside the first tick
     # The profile's design runs through the profile's compensation; a given controller (an
     # identification's excitation) is commanded as it is.
+    profile_controller = controller is None  # an identification's excitation is not the profile's: replay cannot rebuild it
     compensator = make_compensator(profile, controller=profile.control.controller) if controller is None else NoCompensation()
     if controller is None:
         controller = build_controller_for_rig(profile, profile.control.controller)
@@ -327,7 +347,8 @@ def run_session(
     try:
         folder = RunFolder.create(
             settings.log_dir, profile.name, settings.kind, profile.resolved_data(), CONTROL_ROW,
-            metadata=_metadata(profile, settings),
+            metadata={**_metadata(profile, settings), "replay": _replay_facts(settings, profile_controller)},
+            tick_columns=TICK_COLUMNS,
         ).start()
         recording = folder
         stop_if_requested("after creating the run folder")
@@ -355,7 +376,8 @@ def run_session(
         tick.attach_status(status)  # stories, fault code and event lines for the live console
         loop = ControlLoop(tick, profile.loop, profile.control.rate_hz, settings.duration_s, lockstep, on_start, status,
                            table_running=table_link.running if table_link is not None else None, scheduling=scheduling,
-                           recorder_error=lambda: recording.writer_error)
+                           recorder_error=lambda: recording.writer_error,
+                           tick_log=TickLog(folder.record_tick, lambda: recording.frames_recorded))
         controller_name = settings.metadata.get("controller", profile.control.controller)  # an excitation names itself
         title = run_title(profile.name, settings.kind, settings.metadata, controller_name, profile.control.rate_hz,
                           bool(lockstep))

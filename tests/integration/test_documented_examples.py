@@ -61,7 +61,7 @@ REAL_RECORDS = re.compile(r"el_centro|hachinohe|pacoima|ground_motions|profiles/
 #: Commands that open a CAN bus, checked up to it (``resolve``).
 BUS_COMMANDS = ("dry-run", "rig", "identify")
 #: Commands cheap enough to run as written.
-OFFLINE_COMMANDS = ("simulate", "report", "records")
+OFFLINE_COMMANDS = ("simulate", "report", "records", "replay")
 
 
 class ReachedTheBus(Exception):

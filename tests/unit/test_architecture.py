@@ -224,8 +224,8 @@ def test_no_ring_either_through_imports_made_for_a_type() -> None:
 
 #: Layers with a rule of their own: a module may import these only from the layers named.
 #: The live console (``harness.console``) is a view of the loop's status, drawn for a run: it
-#: sits with the runs.
-_RUNS = ("harness.cli", "harness.commands", "harness.runs", "harness.sweep", "harness.console")
+#: sits with the runs; so does the replay of a run (``harness.replay``), a run of the loop on its log.
+_RUNS = ("harness.cli", "harness.commands", "harness.runs", "harness.sweep", "harness.console", "harness.replay")
 UPPER_LAYERS = {
     "harness.commands": ("harness.cli", "harness.commands"),
     "harness.runs": _RUNS,
