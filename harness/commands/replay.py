@@ -13,10 +13,10 @@ from harness.commands.options import add_overrides, output_dir, wrap
 EXAMPLES = """\
 examples:
   harness replay logs/<RUN>          (exact: every frame compared bit for bit with the one the run sent)
-  harness replay logs/<RUN> --set safety.stroke.hard_limit_m=0.09
+  harness replay logs/<RUN> --set safety.stroke.hard_limit_m=0.097
       (what-if, open loop: would the tighter stroke bound have tripped, when and on what)
-  harness replay logs/<RUN> --set control.compensation=model --out whatif/
-  harness report logs/<RUN> whatif/           (recorded and replayed overlaid)
+  harness replay logs/<RUN> --set control.compensation=model --out logs/whatif/
+  harness report logs/<RUN> logs/whatif/          (recorded and replayed overlaid)
 
 exit status: 0 replayed identical, or a what-if replayed; 1 an exact replay that differs from the
 run (the first differing tick is printed: a non-determinism in the tick, or other code than the
@@ -45,7 +45,7 @@ def add_parser(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("run_dir", metavar="RUN_DIR", help="a run folder of `harness dry-run` or `harness run`")
-    add_overrides(parser, "safety.stroke.hard_limit_m=0.008")
+    add_overrides(parser, "safety.stroke.hard_limit_m=0.097")
     parser.add_argument("--out", type=output_dir, metavar="DIR",
                         help="also write the replayed ticks as a run folder in DIR (signals and events), so that "
                         "`harness report RUN_DIR DIR` overlays recorded and replayed")
