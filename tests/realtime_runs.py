@@ -203,3 +203,15 @@ def summary_line(records: list[dict]) -> str:
     return (f"real-time runs: {len(records)} asked for, {runs} started, {refused} refused by the pre-flight "
             f"(run again, up to {MAX_RUNS} runs a test), "
             f"{waited:.0f} s spent waiting for a quiet second ({never} runs started without one)")
+
+
+def running_folder(log_dir: Path, process: subprocess.Popen, timeout_s: float = 120.0) -> Path | None:
+    """The run folder once its events say RUNNING (None if the process ended first)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and process.poll() is None:
+        for folder in log_dir.iterdir():
+            events = folder / "events.jsonl"
+            if events.exists() and '"RUNNING"' in events.read_text():
+                return folder
+        time.sleep(0.05)
+    return None

@@ -25,24 +25,12 @@ import pytest
 
 from harness import exit_codes
 from tests.integration.test_realtime_dry_run import PROFILE_RATE_HZ, STALL_BUDGET_S
-from tests.realtime_runs import run_real_time
+from tests.realtime_runs import run_real_time, running_folder
 
 pytestmark = pytest.mark.realtime
 
 STOP_S = 0.15
 DURATION_S = 8.0
-
-
-def _running_folder(log_dir: Path, process: subprocess.Popen, timeout_s: float = 120.0) -> Path | None:
-    """The run folder once its events say RUNNING (None if the process ended first)."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline and process.poll() is None:
-        for folder in log_dir.iterdir():
-            events = folder / "events.jsonl"
-            if events.exists() and '"RUNNING"' in events.read_text():
-                return folder
-        time.sleep(0.05)
-    return None
 
 
 def _stopped_once_while_running(log_dir: Path, seen: dict[str, Path]) -> subprocess.CompletedProcess:
@@ -52,7 +40,7 @@ def _stopped_once_while_running(log_dir: Path, seen: dict[str, Path]) -> subproc
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                env={**os.environ, "COLUMNS": "120"})
     try:
-        folder = _running_folder(log_dir, process)
+        folder = running_folder(log_dir, process)
         if folder is None:  # ended before RUNNING: refused by the pre-flight (run again) or a failure the test reports
             out, err = process.communicate(timeout=60)
             return subprocess.CompletedProcess(command, process.returncode, out, err)

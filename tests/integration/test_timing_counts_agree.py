@@ -36,24 +36,13 @@ from harness.recording import load_run
 from harness.report import plots_timing
 from harness.report.plot_common import PlotOptions
 from harness.signals.timing_counts import TimingCounts
+from tests.realtime_runs import running_folder
 
 DURATION_S = 3.0
 #: Each stop of the harness process (s) and how many: stalls the loop rides through, whatever the host.
 STOP_S, STOPS = 0.010, 4
 #: The counts as every display prints them (harness.signals.timing_counts.stall_words).
 STALL_LINE = re.compile(r"(\d+) missed periods? in (\d+) stalls? \(ridden through (\d+), past the budget (\d+)\)")
-
-
-def _running_folder(log_dir: Path, process: subprocess.Popen, timeout_s: float = 120.0) -> Path | None:
-    """The run folder once its events say RUNNING (None if the process ended first)."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline and process.poll() is None:
-        for folder in log_dir.iterdir():
-            events = folder / "events.jsonl"
-            if events.exists() and '"RUNNING"' in events.read_text():
-                return folder
-        time.sleep(0.05)
-    return None
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +53,7 @@ def stalled_run(tmp_path_factory) -> tuple[str, Path]:
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={**os.environ, "COLUMNS": "250"},
     )
     try:
-        folder = _running_folder(log_dir, process)
+        folder = running_folder(log_dir, process)
         if folder is None:
             out, err = process.communicate(timeout=120)
             if process.returncode == exit_codes.INPUT_ERROR and "pre-flight" in (out + err):
