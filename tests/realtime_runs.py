@@ -30,8 +30,10 @@ and prints one summary line at the end of the stage, so retries are seen even wh
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
+import signal
 import subprocess
 import time
 from collections.abc import Callable
@@ -215,3 +217,19 @@ def running_folder(log_dir: Path, process: subprocess.Popen, timeout_s: float = 
                 return folder
         time.sleep(0.05)
     return None
+
+
+def pause(process: subprocess.Popen, stop_s: float, after_s: float) -> None:
+    """After ``after_s``, stop ``process`` (SIGSTOP) for ``stop_s`` and let it go on (SIGCONT): a stall it must ride."""
+    time.sleep(after_s)
+    os.kill(process.pid, signal.SIGSTOP)
+    time.sleep(stop_s)
+    os.kill(process.pid, signal.SIGCONT)
+
+
+def end(process: subprocess.Popen) -> None:
+    """Kill ``process`` if it still runs (continued first, in case it was left stopped) and reap it."""
+    if process.poll() is None:
+        os.kill(process.pid, signal.SIGCONT)
+        process.kill()
+        process.wait()

@@ -15,17 +15,15 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from harness import exit_codes
 from tests.integration.test_realtime_dry_run import PROFILE_RATE_HZ, STALL_BUDGET_S
-from tests.realtime_runs import run_real_time, running_folder
+from tests.realtime_runs import end, pause, run_real_time, running_folder
 
 pytestmark = pytest.mark.realtime
 
@@ -45,16 +43,10 @@ def _stopped_once_while_running(log_dir: Path, seen: dict[str, Path]) -> subproc
             out, err = process.communicate(timeout=60)
             return subprocess.CompletedProcess(command, process.returncode, out, err)
         seen["folder"] = folder
-        time.sleep(0.3)
-        os.kill(process.pid, signal.SIGSTOP)
-        time.sleep(STOP_S)
-        os.kill(process.pid, signal.SIGCONT)
+        pause(process, STOP_S, after_s=0.3)
         out, err = process.communicate(timeout=120)
     finally:
-        if process.poll() is None:
-            os.kill(process.pid, signal.SIGCONT)
-            process.kill()
-            process.wait()
+        end(process)
     return subprocess.CompletedProcess(command, process.returncode, out, err)
 
 

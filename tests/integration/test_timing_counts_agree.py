@@ -21,10 +21,8 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +34,7 @@ from harness.recording import load_run
 from harness.report import plots_timing
 from harness.report.plot_common import PlotOptions
 from harness.signals.timing_counts import TimingCounts
-from tests.realtime_runs import running_folder
+from tests.realtime_runs import end, pause, running_folder
 
 DURATION_S = 3.0
 #: Each stop of the harness process (s) and how many: stalls the loop rides through, whatever the host.
@@ -60,16 +58,10 @@ def stalled_run(tmp_path_factory) -> tuple[str, Path]:
                 pytest.skip("the pre-flight refused this busy host before arming: " + out.strip()[-300:])
             pytest.fail("the run never reached RUNNING: " + out[-2000:] + err[-2000:])
         for _ in range(STOPS):
-            time.sleep(0.2)
-            os.kill(process.pid, signal.SIGSTOP)
-            time.sleep(STOP_S)
-            os.kill(process.pid, signal.SIGCONT)
+            pause(process, STOP_S, after_s=0.2)
         out, err = process.communicate(timeout=300)
     finally:
-        if process.poll() is None:
-            os.kill(process.pid, signal.SIGCONT)
-            process.kill()
-            process.wait()
+        end(process)
     # a stop can land on a loaded host's own stall and pass the budget (loop_stall): the counts must agree all the same
     assert process.returncode in (exit_codes.OK, exit_codes.TRIPPED), out[-3000:] + err[-3000:]
     return out, folder
