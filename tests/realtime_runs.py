@@ -52,8 +52,14 @@ MAX_RUNS = 5
 QUIET_WAIT_S = 30.0
 #: The words of the pre-flight's refusal (HostTiming.check); tests/unit/test_realtime_runs.py holds them to it.
 REFUSAL = "this host cannot run the loop within its stall budget"
-#: The pre-flight's figures in a refusal: from "host timing at" to the verdict.
-FIGURES = re.compile(r"host timing at .*?: refused")
+#: The words of a refusal to arm because the loop itself stalled past its budget while arming (runner's ArmTimeout
+#: with its stall note): the host stopped the loop after the pre-flight passed, nothing moved; the drive's watchdog
+#: latched a fault. The same host noise as the pre-flight's refusal, caught a moment later.
+ARM_STALL = "the loop itself stalled"
+#: The words that open every refusal to arm (harness/loop/runner.py ArmTimeout).
+ARM_REFUSAL = "could not arm within"
+#: The pre-flight's figures in a refusal: from "host timing at" to the verdict; or the arming stall's figures.
+FIGURES = re.compile(r"host timing at .*?: refused|the loop itself stalled [^:]*")
 #: The name of the counts in a test report's user_properties.
 PROPERTY = "real_time_runs"
 
@@ -126,8 +132,16 @@ def wait_for_quiet_second(
 
 
 def refused_by_preflight(done: subprocess.CompletedProcess) -> bool:
-    """True when ``done`` is a run the pre-flight refused: exit status 2 with the refusal's words."""
-    return done.returncode == exit_codes.INPUT_ERROR and REFUSAL in _output(done)
+    """True when ``done`` is a run refused for the host's timing before anything moved: exit status 2 with the words.
+
+    Either the pre-flight's refusal, or a refusal to arm that names the loop's own stall past its budget as
+    the cause (the host stopped the loop while arming, after the pre-flight passed). A refusal to arm for
+    any other reason is the test's to judge.
+    """
+    if done.returncode != exit_codes.INPUT_ERROR:
+        return False
+    output = _output(done)
+    return REFUSAL in output or (ARM_REFUSAL in output and ARM_STALL in output)
 
 
 def _output(done: subprocess.CompletedProcess) -> str:

@@ -8,10 +8,12 @@ from __future__ import annotations
 import os
 import subprocess
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
 from harness import exit_codes
+from harness.loop.runner import ArmTimeout, ControlLoop
 from harness.loop.preflight import MIN_IDLE_CORES, HostTiming, HostTimingRefused
 from harness.realtime.host import Scheduling
 from tests import realtime_runs
@@ -65,6 +67,25 @@ def test_the_refusal_words_are_the_preflights_own():
 ])
 def test_only_the_preflights_refusal_counts_as_refused(status, err):
     assert not refused_by_preflight(_done(status, err=err))
+
+
+def _arm_refusal_text(gap_s: float | None) -> str:
+    """What the harness prints when it could not arm: ArmTimeout with the loop's own stall note (none if ``gap_s`` is None)."""
+    loop = SimpleNamespace(gaps_past_budget=0 if gap_s is None else 1, last_gap_past_budget_s=gap_s or 0.0,
+                           last_gap_past_budget_end_s=0.37, max_stall_s=0.08)
+    failed = "arm refused: expected every pre-arm check to pass, failed: actuator_ready: drive ready=False, fault=True"
+    return f"error: {ArmTimeout(failed + ControlLoop._stall_note(loop), 3.0)}\n"
+
+
+def test_a_refusal_to_arm_after_the_loops_own_stall_counts_as_refused():
+    """The host stopped the loop while it armed (CI: 126 ms inside User-Mode Linux): nothing moved, run again."""
+    text = _arm_refusal_text(0.126)
+    assert refused_by_preflight(_done(exit_codes.INPUT_ERROR, err=text))
+    assert realtime_runs.FIGURES.search(text).group(0) == "the loop itself stalled 126.0 ms up to t = 0.370 s, past its 80.0 ms stall budget (a drive's watchdog fault after it is the stall's)"
+
+
+def test_a_refusal_to_arm_for_any_other_cause_is_the_tests_to_judge():
+    assert not refused_by_preflight(_done(exit_codes.INPUT_ERROR, err=_arm_refusal_text(None)))
 
 
 def test_a_refused_run_is_run_again_and_its_folder_set_aside(tmp_path, capsys):
