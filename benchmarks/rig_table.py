@@ -14,7 +14,12 @@ and a lockstep dry run on the servo-hydraulic rig (the shipped default): drift r
 story, floor and base-mat acceleration reduction, sliding displacement over passive, and the
 peak force in % of the weight. Every reduction is against the same ideal passive simulation.
 
-Usage: python benchmarks/rig_table.py [--records-dir DIR] [--rig-effects] [--dry-runs] [--set KEY=VALUE ...] [--markdown]
+With ``--feedforward`` it compares the servo controller's velocity feed-forward (issue 31) on the
+lockstep twin; with ``--feedforward --dry-runs`` as dry runs over the bus, the feed-forward rig with
+the harness's ``model`` compensation added as a third column, lockstep or (``--real-time``) real time.
+
+Usage: python benchmarks/rig_table.py [--records-dir DIR] [--rig-effects] [--dry-runs] [--feedforward]
+       [--real-time] [--set KEY=VALUE ...] [--markdown]
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from rich.table import Table  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
 from harness.runs.options import StudyOptions  # noqa: E402
-from harness.runs.simulate import run_study
+from harness.runs.simulate import run_study  # noqa: E402
 from harness.signals.peaks import reduction_pct  # noqa: E402
 
 #: Ideal control: the column that is a simulation, not a dry run.
@@ -211,9 +216,88 @@ def feedforward_results(profile_path: Path, records_dir: str, overrides: list[st
     return results
 
 
-def feedforward_rows(results: dict) -> list[list[str]]:
+#: The columns of the feed-forward dry runs (issue 31, lockstep or real time): the twin's two, then the
+#: feed-forward rig with the harness's own compensation (``model``: ``adaptive`` is not yet usable on it).
+FEEDFORWARD_DRY_RUN_COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    *FEEDFORWARD_COLUMNS,
+    ("rig, feed-forward + model compensation", ("control.compensation=model",)),
+)
+
+
+def _tracking_cells(run_path: Path, record_start_s: float | None, duration_s: float) -> dict:
+    """Force-tracking delay (ms) and RMS error (%) of a dry run's load cell against the command sent, over the record.
+
+    A delay at the search's limit (:data:`~harness.report.force_tracking.MAX_LAG_S`) is no delay found: the
+    table prints it as such.
+    """
+    from harness.recording import load_run
+    from harness.report.force_tracking import run_force_tracking
+
+    start_s = -math.inf if record_start_s is None else record_start_s
+    tracked = run_force_tracking(load_run(run_path).signals, asked="force_command_N", start_s=start_s,
+                                 end_s=start_s + duration_s)
+    return {"delay_ms": math.nan if tracked is None else tracked.delay_s * 1e3,
+            "rms_pct": math.nan if tracked is None else tracked.rms_error_percent}
+
+
+#: Runs of one real-time column at most: the first and those the pre-flight refused (nothing moved).
+MAX_RUNS = 5
+
+
+def _dry_run_past_the_preflight(profile, options: DryRunOptions):
+    """A dry run, run again while the pre-flight refuses it (a busy second of the host; never a bound loosened)."""
+    from harness.loop.preflight import HostTimingRefused
+
+    for attempt in range(1, MAX_RUNS + 1):
+        try:
+            return dry_run(profile, options)
+        except HostTimingRefused as refused:
+            print(f"  refused by the pre-flight (run {attempt} of {MAX_RUNS}): {refused}", file=sys.stderr)
+    raise SystemExit(f"the pre-flight refused {MAX_RUNS} runs: this host is too busy for real-time dry runs now")
+
+
+def feedforward_dry_run_results(profile_path: Path, records_dir: str, overrides: list[str], log_dir: str,
+                                lockstep: bool) -> dict:
+    """Per record: ideal passive and controlled peaks, and each :data:`FEEDFORWARD_DRY_RUN_COLUMNS` case as a dry run.
+
+    The dry runs go through the whole path, the virtual rig in its own process over the default bus;
+    ``lockstep`` False runs them in real time (the pre-flight judges the host before each; a refusal is
+    run again, up to :data:`MAX_RUNS` runs, after which the table is not made).
+    """
+    results: dict = {}
+    for record, pga_g in RIG_RECORDS:
+        options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0, duration_s=30.0)
+        ideal = run_study(load_profile(profile_path, overrides=overrides), options)
+        results[record] = {"passive": ideal.cases["passive"].peaks.flatten(),
+                           IDEAL: ideal.cases["controlled"].peaks.flatten()}
+        for name, extra in FEEDFORWARD_DRY_RUN_COLUMNS:
+            profile = load_profile(profile_path, overrides=[*overrides, *extra])
+            run = _dry_run_past_the_preflight(profile, DryRunOptions(
+                study=options, lockstep=lockstep, show_console=False, compare=False, log_dir=log_dir))
+            outcome = str(run.session.outcome).split(".")[-1].lower()
+            trip = getattr(run.session, "trip_reason", "") or ""
+            results[record][name] = {**run.peaks.flatten(), "outcome": f"{outcome} {trip}".strip(),
+                                     **_tracking_cells(run.session.run_path, run.session.loop.record_start_t_s,
+                                                       options.duration_s)}
+            print(f"{record} {name}: {outcome} {trip}", file=sys.stderr)
+    return results
+
+
+def _delay_cell(delay_ms: float | None) -> str:
+    """A force-tracking delay (ms) for the table: ``-`` where none was measured, ``none within N`` at the search's limit."""
+    from harness.report.force_tracking import MAX_LAG_S
+
+    if delay_ms is None or math.isnan(delay_ms):
+        return "-"
+    if abs(delay_ms) >= MAX_LAG_S * 1e3 - 1e-6:
+        return f"none within {MAX_LAG_S * 1e3:.0f}"
+    return f"{delay_ms:.1f}"
+
+
+def feedforward_rows(results: dict, columns: tuple[tuple[str, tuple[str, ...]], ...] = FEEDFORWARD_COLUMNS
+                     ) -> list[list[str]]:
     """One row per quantity: per record, ideal control then each feed-forward column."""
-    names = [IDEAL, *(name for name, _ in FEEDFORWARD_COLUMNS)]
+    names = [IDEAL, *(name for name, _ in columns)]
     rows = []
     for key, label in PREDICTED:
         row = [label]
@@ -231,7 +315,7 @@ def feedforward_rows(results: dict) -> list[list[str]]:
             peaks = results[record][name]
             extra_rows[0].append(f"{peaks['sliding_displacement_m'] / passive:.2f}")
             extra_rows[1].append(f"{peaks['peak_force_pct_weight']:.1f}")
-            extra_rows[2].append(f"{peaks['delay_ms']:.1f}" if "delay_ms" in peaks else "-")
+            extra_rows[2].append(_delay_cell(peaks.get("delay_ms")))
             extra_rows[3].append(f"{peaks['rms_pct']:.0f}" if "rms_pct" in peaks else "-")
             extra_rows[4].append(str(peaks.get("outcome", "-")))
     return [*rows, *extra_rows]
@@ -252,7 +336,19 @@ def main() -> int:
     parser.add_argument("--log-dir", default=None, help="where the dry runs' folders go (default: a temporary folder)")
     parser.add_argument("--feedforward", action="store_true",
                         help="ideal control against the lockstep twin without and with the servo controller's feed-forward")
+    parser.add_argument("--real-time", action="store_true",
+                        help="with --feedforward --dry-runs: the dry runs in real time instead of lockstep")
     args = parser.parse_args()
+    if args.feedforward and args.dry_runs:
+        columns = FEEDFORWARD_DRY_RUN_COLUMNS
+        names = [IDEAL, *(name for name, _ in columns)]
+        with tempfile.TemporaryDirectory() as scratch:
+            results = feedforward_dry_run_results(Path(args.profile), args.records_dir, args.overrides,
+                                                  args.log_dir or scratch, lockstep=not args.real_time)
+            rows = feedforward_rows(results, columns)
+        print_markdown(rows, ["quantity", *(f"{record} {pga:.2f} g: {name}" for record, pga in RIG_RECORDS
+                                            for name in names)])
+        return 0
     if args.feedforward:
         names = [IDEAL, *(name for name, _ in FEEDFORWARD_COLUMNS)]
         print_markdown(feedforward_rows(feedforward_results(Path(args.profile), args.records_dir, args.overrides)),

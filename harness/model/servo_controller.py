@@ -25,6 +25,12 @@ What feed-forward leaves behind is physics: at steady stroke velocity ``v`` and 
 pressure ``p_L`` the force lost is ``c v (1 / s - alpha K_q,true / K_q,nom)`` with the
 orifice's ``s = sqrt(1 - sign(v) p_L / p_s)`` (:func:`steady_bleed_N`), plus the
 sensor's delay and filter lag times ``c`` times the stroke acceleration.
+
+No Delta-P term in this force loop (SPEC 7a' leaves it optional): the load cell measures
+``A p_L`` less the seal friction, so a differential-pressure gain here would be a second
+proportional gain on the same quantity, not a new one. Delta-P stabilisation damps an oil
+column under displacement control, where nothing else feeds the pressure back: the shaking
+table's own loop has it (``rig.table.pressure_feedback_damping_ratio``).
 """
 
 from __future__ import annotations
