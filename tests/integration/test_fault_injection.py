@@ -1,5 +1,6 @@
 """Fault-injection dry runs (lockstep, deterministic): each fault the rig injects trips the run
-with the expected reason within the detector's stated bound (docs/SAFETY.md)."""
+with the expected reason within the detector's stated bound (docs/SAFETY.md), and replays bit for bit
+with that trip (``harness replay``, issue 34)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from harness import exit_codes
 from harness.cli import main
 from harness.profile import load_profile
 from harness.recording import load_run
+from tests.replay_checks import assert_trip_replayed
 
 FAULT_AT_S = 1.0  # record time of the fault's onset
 PERIOD_S = 0.002  # 500 Hz
@@ -80,6 +82,7 @@ def test_injected_fault_trips_with_its_reason_within_its_bound(tmp_path, capsys,
         f"{case}: detected after {latency * 1e3:.1f} ms, bound {bound_s * 1e3:.1f} ms"
     )
     assert run["force_command_N"][-1] == 0.0 and run["drive_enabled"][-1] == 0.0
+    assert_trip_replayed(capsys, folder, reason)  # issue 34: each fault's run replays bit for bit, with its trip
 
 
 def test_a_frozen_base_mat_sensor_at_rest_trips_sensor_stuck(tmp_path, capsys):
