@@ -16,7 +16,6 @@ from harness.commands.options import (
     add_bus_options,
     add_profile_options,
     add_record_options,
-    check_loop_rate,
     check_run_length,
     load_acknowledged,
     non_empty,
@@ -83,6 +82,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.report.table_check import table_check
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import DryRunOptions, dry_run
+    from harness.runs.loop_rate import check_loop_rate
     from harness.runs.options import resolve_profile
     from harness.signals.peaks import ComparisonWindow
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 import textwrap
 from collections.abc import Callable
 from pathlib import Path
@@ -271,7 +270,7 @@ def add_profile_options(parser: argparse.ArgumentParser, default_help: str) -> N
     )
 
 
-#: What --rate of a loop command (run, dry-run) must also meet, for --help: the bounds :func:`check_loop_rate` derives.
+#: What --rate of a loop command (run, dry-run) must also meet, for --help: the bounds harness/runs/loop_rate.py derives.
 LOOP_RATE_HELP = (
     f"; and at least {limits.STALL_BUDGET_PERIODS:g} / safety.run.max_stall_s, {limits.WATCHDOG_PERIODS:g} / "
     "rig.drive.watchdog_timeout_s and 1 / safety.sensors.max_sensor_age_s (100 Hz for the shipped profiles), "
@@ -280,93 +279,6 @@ LOOP_RATE_HELP = (
 #: What --duration must also meet, for --help: the record loader's bound (all commands) and :func:`check_run_length`.
 RECORD_DURATION_HELP = f"; and at least {limits.MIN_RUN_SAMPLES} samples of the record"
 DURATION_HELP = f"{RECORD_DURATION_HELP} and {limits.MIN_RUN_SAMPLES} periods of the control rate"
-
-
-def _given_as(option: str, given: bool, profile, key: str) -> tuple[str, str | None]:
-    """(source, key path) of a :class:`ProfileError` about a value: the option if it was given, else the profile's key."""
-    return (option, None) if given else (profile.source_path, key)
-
-
-def check_loop_rate(profile, rate_given: bool, *, virtual_rig: bool) -> None:
-    """Refuse a loop rate at which a run or a dry run could not arm, or not hold the loop, before anything starts.
-
-    The range of ``--rate`` says what the parser accepts; a loop also needs its period short
-    enough for what the profile's safety settings expect of it (harness/config/input_limits.py
-    derives each):
-
-    - :data:`~harness.config.input_limits.STALL_BUDGET_PERIODS` periods within ``safety.run.max_stall_s``;
-    - :data:`~harness.config.input_limits.WATCHDOG_PERIODS` periods within ``rig.drive.watchdog_timeout_s``;
-    - the sensor frames' period (``can.sensor_rate_hz``, which ``--rate`` sets) within
-      ``safety.sensors.max_sensor_age_s``: a sample is up to a period old when a tick reads it;
-    - for the virtual rig of a dry run, a whole number of ``rig.physics_substep_s`` per period.
-
-    A lockstep dry run is held to the same bounds: it rehearses the real-time loop at the
-    same rate, so a rate that loop cannot hold would rehearse nothing (and far below them the
-    rig's step of period / ``physics_substep_s`` sub-steps outgrows ``loop.lockstep_timeout_s``:
-    ``--rate 0.001`` asked for two million a step, and the dry run could not arm).
-
-    Parameters
-    ----------
-    profile : Profile
-        Resolved: ``--rate`` already folded in (``resolve_profile``).
-    rate_given : bool
-        True if ``--rate`` set the rate (the message then names it; else ``loop.rate_hz``).
-    virtual_rig : bool
-        True for a dry run.
-
-    Raises
-    ------
-    ProfileError
-        Naming ``--rate`` (or ``loop.rate_hz``), the rate found, the least rate accepted and why.
-    """
-    from harness.errors import ProfileError
-
-    rate_hz = profile.loop.rate_hz
-    period_s = 1.0 / rate_hz
-    source, key = _given_as("--rate", rate_given, profile, "loop.rate_hz")
-    bounds = (
-        ("safety.run.max_stall_s", profile.safety.run.max_stall_s, limits.STALL_BUDGET_PERIODS,
-         "the shortest stall, one missed deadline, is two periods between ticks"),
-        ("rig.drive.watchdog_timeout_s", profile.rig.drive.watchdog_timeout_s, limits.WATCHDOG_PERIODS,
-         "the drive disables itself when no command reaches it for that long"),
-    )
-    too_slow = [(name, value, periods, why) for name, value, periods, why in bounds if period_s * periods > value * (1 + 1e-9)]
-    if too_slow:
-        least_hz = max(periods / value for _, value, periods, _ in bounds)
-        reasons = "; ".join(f"{periods:g} periods must fit in {name} ({value * 1e3:g} ms: {why})"
-                            for name, value, periods, why in too_slow)
-        raise ProfileError(
-            f"found {rate_hz:g} Hz (a period of {period_s * 1e3:g} ms), expected at least {least_hz:g} Hz: {reasons} "
-            "(docs/SAFETY.md, Stall budget; lockstep too is held to this, as it rehearses the real-time loop)", source, key,
-        )
-    sensor_period_s = 1.0 / profile.can.sensor_rate_hz
-    age_s = profile.safety.sensors.max_sensor_age_s
-    if sensor_period_s > age_s * (1 + 1e-9):
-        source, key = _given_as("--rate", rate_given, profile, "can.sensor_rate_hz")
-        raise ProfileError(
-            f"found sensor frames every {sensor_period_s * 1e3:g} ms ({profile.can.sensor_rate_hz:g} Hz), expected at "
-            f"least {1.0 / age_s:g} Hz: a sample is up to a period old when a tick reads it, and "
-            f"safety.sensors.max_sensor_age_s is {age_s * 1e3:g} ms", source, key,
-        )
-    if virtual_rig:
-        _check_rig_substeps(profile, period_s, source, key)
-
-
-def _check_rig_substeps(profile, period_s: float, source: str, key: str | None) -> None:
-    """The virtual rig steps whole physics sub-steps per loop period (else its process exits once the run began)."""
-    from harness.errors import ProfileError
-
-    substep_s = profile.rig.physics_substep_s
-    steps = round(period_s / substep_s)
-    if steps >= 1 and abs(steps * substep_s - period_s) <= 1e-9 * period_s:
-        return
-    fewer = max(1, math.floor(period_s / substep_s))
-    nearby = sorted({1.0 / (n * substep_s) for n in (fewer, fewer + 1)}, reverse=True)
-    raise ProfileError(
-        f"found {profile.loop.rate_hz:g} Hz: its period of {period_s * 1e3:g} ms is not a whole number of the virtual "
-        f"rig's physics sub-steps (rig.physics_substep_s = {substep_s * 1e3:g} ms); expected a rate such as "
-        + " or ".join(f"{rate:g} Hz" for rate in nearby), source, key,
-    )
 
 
 def check_run_length(profile, args: argparse.Namespace) -> None:
@@ -390,6 +302,7 @@ def check_run_length(profile, args: argparse.Namespace) -> None:
         Naming ``--duration`` (or ``record.duration_s``), the length found and the least accepted.
     """
     from harness.errors import ProfileError
+    from harness.runs.loop_rate import given_as
 
     given = getattr(args, "duration", None)
     duration_s = given if given is not None else profile.record.duration_s
@@ -398,7 +311,7 @@ def check_run_length(profile, args: argparse.Namespace) -> None:
     rate_hz = getattr(args, "rate", None) or profile.control.rate_hz
     shortest_s = limits.MIN_RUN_SAMPLES / rate_hz
     if duration_s < shortest_s * (1 - 1e-9):
-        source, key = _given_as("--duration", given is not None, profile, "record.duration_s")
+        source, key = given_as("--duration", given is not None, profile, "record.duration_s")
         raise ProfileError(
             f"found {duration_s:g} s, expected at least {shortest_s:g} s: {limits.MIN_RUN_SAMPLES} periods of the "
             f"{rate_hz:g} Hz control rate (a shorter run has too few samples for its peaks to mean anything)", source, key,

@@ -21,7 +21,6 @@ from harness.commands.options import (
     add_bus_options,
     add_profile_options,
     add_record_options,
-    check_loop_rate,
     check_run_length,
     load_acknowledged,
     non_empty,
@@ -80,6 +79,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from pathlib import Path
 
     from harness.paths import LOG_DIR
+    from harness.runs.loop_rate import check_loop_rate
     from harness.runs.options import resolve_profile
     from harness.runs.run import answer_arms, arm_question, prepare_rig_run, run_on_rig, session_settings
 

@@ -46,6 +46,7 @@ from harness.recording import load_run
 from harness.recording.runfolder import check_log_dir
 from harness.recording.space import check_log_space
 from harness.rig.truth import truth_metadata, truth_summary
+from harness.runs.loop_rate import check_loop_rate
 from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, expected_run_size, run_session
@@ -382,9 +383,17 @@ def serving_virtual_rig(
     motion : GroundMotion
         The processed record (the in-process rig's table; the rig process prepares its own).
     external_rig : bool
+
+    Raises
+    ------
+    ProfileError
+        For a loop rate the run could not arm at or hold, or whose period is not whole physics
+        sub-steps of the rig (:func:`~harness.runs.loop_rate.check_loop_rate`), before the rig starts.
     """
     from harness.canbus.link import open_rig
     from harness.rig.virtual_rig import VirtualRig
+
+    check_loop_rate(profile, rate_given=False, virtual_rig=not external_rig)
 
     rate_hz = profile.control.rate_hz
     rig = rig_link = process = None
@@ -415,6 +424,7 @@ def dry_run(profile: Profile, options: DryRunOptions, console=None, on_host_timi
     warm_up()  # compile the kernels now, never inside the loop or the rig
     stop_if_requested("after loading the compiled kernels")
     profile = resolve_profile(profile, options.study)
+    check_loop_rate(profile, options.study.rate_hz is not None, virtual_rig=not options.external_rig)
     motion = prepare_motion(profile)
     rate_hz = profile.control.rate_hz
     can = private_bus(profile.can_settings(options.interface, options.channel), options.external_rig)

@@ -38,6 +38,7 @@ from harness.recording import RunFolder
 from harness.recording.layout import Outcome, RunKind
 from harness.recording.runfolder import check_log_dir
 from harness.recording.space import RunSize, check_log_space, run_size
+from harness.runs.loop_rate import check_loop_rate
 from harness.safety.config import TRIP_CLASSES
 from harness.safety.supervisor import Supervisor
 from harness.safety.table_record import NO_RECORD
@@ -318,7 +319,12 @@ def run_session(
     ------
     HostTimingRefused
         In real time, when the host cannot hold the stall budget (nothing was moved).
+    ProfileError
+        For a loop rate the run could not arm at or hold (:func:`~harness.runs.loop_rate.check_loop_rate`),
+        whoever called: the command line checks it first, naming ``--rate``; this is the check a
+        direct caller cannot skip.
     """
+    check_loop_rate(profile, rate_given=False, virtual_rig=False)
     if profile.structure.n_stories != PROTOCOL_STORIES:
         raise ProfileError(f"the CAN protocol carries {PROTOCOL_STORIES} stories; this profile has {profile.structure.n_stories}",
                            profile.source_path, "structure")

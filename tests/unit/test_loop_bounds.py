@@ -12,11 +12,12 @@ import dataclasses
 import pytest
 
 from harness.cli import build_parser
-from harness.commands.options import check_loop_rate, check_run_length
+from harness.commands.options import check_run_length
 from harness.config.input_limits import MIN_RUN_SAMPLES
 from harness.errors import ProfileError, RecordError
 from harness.motions.config import SYNTHETIC_DT_S, load_motion
 from harness.profile import load_profile
+from harness.runs.loop_rate import check_loop_rate
 from harness.runs.options import StudyOptions, resolve_profile
 from tests.conftest import PROFILES
 
@@ -119,3 +120,45 @@ def test_help_states_the_rate_and_duration_bounds(command):
            "1 / safety.sensors.max_sensor_age_s (100 Hz for the shipped profiles), in lockstep too" in text
     assert "in (0, 600]; and at least 10 samples of the record and 10 periods of the control rate" in text
     assert ("a whole number of rig.physics_substep_s per period" in text) == (command == "dry-run")
+
+
+def _nothing_may_start(*args, **kwargs):
+    raise AssertionError("the loop-rate check must refuse before anything starts")
+
+
+def test_a_dry_run_called_directly_is_refused_a_bad_rate_before_anything_starts(tmp_path, monkeypatch):
+    """Issue 35: the check lived in the command line only; harness/runs/dry_run.py called directly skipped it."""
+    import harness.runs.dry_run as dry_run_module
+    from harness.runs.dry_run import DryRunOptions
+
+    monkeypatch.setattr(dry_run_module, "serving_virtual_rig", _nothing_may_start)
+    monkeypatch.setattr(dry_run_module, "run_session", _nothing_may_start)
+    options = DryRunOptions(study=StudyOptions(rate_hz=10.0, duration_s=1.0), lockstep=True, show_console=False,
+                            compare=False, log_dir=str(tmp_path))
+    with pytest.raises(ProfileError, match=r"--rate: found 10 Hz .* expected at least 100 Hz"):
+        dry_run_module.dry_run(load_profile(RIG), options)
+    assert not any(tmp_path.iterdir())  # no run folder
+
+
+def test_an_identification_called_directly_is_refused_a_bad_rate_before_anything_starts(tmp_path, monkeypatch):
+    """harness/runs/identify.py goes through the session and the virtual rig, which check the rate whoever calls."""
+    import harness.runs.dry_run as dry_run_module
+    from harness.identification.excitation import Excitation
+    from harness.runs.identify import IdentifyOptions, identify_actuator
+
+    monkeypatch.setattr(dry_run_module, "_rig_process", _nothing_may_start)
+    profile = load_profile(RIG, overrides=["loop.rate_hz=50", "control.rate_hz=50", "can.command_rate_hz=50",
+                                           "can.sensor_rate_hz=50"])
+    options = IdentifyOptions(Excitation("chirp", 1000.0, (1.0, 10.0), 4.0, resolution_hz=1.0), tmp_path / "id", lockstep=True,
+                              show_console=False)
+    with pytest.raises(ProfileError, match=r"loop.rate_hz.*found 50 Hz .* expected at least 100 Hz"):
+        identify_actuator(profile, options)
+
+
+def test_the_virtual_rig_refuses_a_period_of_part_sub_steps_whoever_starts_it():
+    from harness.runs.dry_run import serving_virtual_rig
+
+    profile = _at(300.0)  # 3.33 ms: not whole 0.5 ms sub-steps (the shipped rig's)
+    with pytest.raises(ProfileError, match=r"not a whole number of the virtual rig's physics sub-steps"):
+        with serving_virtual_rig(profile, profile.can_settings(None, None), True, None):  # type: ignore[arg-type]
+            pass
