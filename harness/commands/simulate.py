@@ -84,8 +84,9 @@ def add_parser(sub) -> None:
         help="with --rig-effects: drive the twin's table with the table motion the run in RUN_DIR (a dry run's or "
         "run's folder) achieved, its measured table displacement and velocity at each tick, in place of the record: "
         "twin sample k is the run's tick k, so the rate must be the run's (--rate); the table follows that motion "
-        "exactly (rig.table.model motion_source). Closed loop on the twin: the structure answers this controller, "
-        "the table does what it did in the run. --duration keeps its first seconds; --record, --records-dir, --pga "
+        "exactly (rig.table.model motion_source). Closed loop on the twin of the profile given (PROFILE, --overlay "
+        "identified.yaml, --set; a note says so when the run's profile had another name): the structure answers this "
+        "controller, the table does what it did in the run. --duration keeps its first seconds; --record, --records-dir, --pga "
         "and --time-scale do not apply",
     )
     output = parser.add_argument_group("output")

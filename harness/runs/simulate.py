@@ -117,7 +117,8 @@ def _study_motion(profile: Profile, options: StudyOptions) -> tuple[GroundMotion
     if not options.rig_effects:
         raise DriveFromError(f"--drive-from {options.drive_from} drives the rig twin with the table motion a run "
                              "achieved, expected --rig-effects with it (the ideal simulation has no rig)")
-    return achieved_motion(options.drive_from, profile.control.rate_hz, options.duration_s), driven_profile(profile)
+    motion = achieved_motion(options.drive_from, profile.control.rate_hz, options.duration_s, profile.name)
+    return motion, driven_profile(profile)
 
 
 def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, float], None] | None = None) -> StudyResult:

@@ -38,7 +38,9 @@ class DriveFromError(HarnessError, ValueError):
     """A ``--drive-from`` folder that cannot drive the twin: not a run folder, no table signals, another rate."""
 
 
-def achieved_motion(run_dir: Path | str, rate_hz: float, duration_s: float | None = None) -> GroundMotion:
+def achieved_motion(
+    run_dir: Path | str, rate_hz: float, duration_s: float | None = None, profile_name: str | None = None,
+) -> GroundMotion:
     """The table motion the run in ``run_dir`` achieved, on its tick grid, to drive the rig twin.
 
     Parameters
@@ -49,6 +51,8 @@ def achieved_motion(run_dir: Path | str, rate_hz: float, duration_s: float | Non
         The twin's controller rate (Hz); the run's loop rate must be the same.
     duration_s : float, optional
         Keep the first ``duration_s`` seconds of the motion (s); None keeps all of it.
+    profile_name : str, optional
+        The name of the profile the twin runs; a note says so where the run's was another.
 
     Returns
     -------
@@ -87,6 +91,10 @@ def achieved_motion(run_dir: Path | str, rate_hz: float, duration_s: float | Non
     notes = (f"the table motion run {folder} achieved: its measured {TABLE_DISPLACEMENT} and {TABLE_VELOCITY} at "
              f"{rate_hz:g} Hz, acceleration their velocity's derivative; the twin's table follows it exactly "
              "(rig.table.model motion_source): the run's shaking, not the table's answer to this controller's forces",)
+    run_profile = run.metadata.get("profile_name")
+    if profile_name is not None and run_profile and run_profile != profile_name:
+        notes += (f"the run was made with profile {run_profile!r}, this simulation runs {profile_name!r}: the shaking is "
+                  "that run's, the structure and rig are this profile's",)
     return GroundMotion(
         name=f"achieved_{folder.name}", dt_s=1.0 / rate_hz, time_scale=1.0, t_s=times,
         accel_m_s2=np.gradient(velocity, 1.0 / rate_hz), velocity_m_s=velocity, displacement_m=displacement,

@@ -55,6 +55,17 @@ def test_the_twins_table_moves_through_the_runs_measured_table_motion(dry_run):
     assert study.profile.rig.table.model == "motion_source"
 
 
+def test_the_drive_says_where_it_came_from_and_when_the_runs_profile_was_another(dry_run):
+    from harness.simulation.drive import achieved_motion
+
+    motion = achieved_motion(dry_run, 500.0, duration_s=0.5, profile_name="eight_story")
+    assert motion.duration_s == pytest.approx(0.5) and motion.time_scale == 1.0
+    assert any(f"the table motion run {dry_run} achieved" in note for note in motion.notes)
+    assert any("the run was made with profile 'nceer_4dof', this simulation runs 'eight_story'" in note
+               for note in motion.notes)
+    assert len(achieved_motion(dry_run, 500.0, profile_name="nceer_4dof").notes) == 1
+
+
 def test_simulate_drive_from_runs_on_the_command_line(dry_run, capsys, tmp_path):
     path = tmp_path / "twin.json"
     status, out = _cli(capsys, "simulate", "--rig-effects", "--drive-from", str(dry_run), "--duration", "1",
