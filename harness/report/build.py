@@ -226,7 +226,7 @@ def build_report(
     notify("writing HTML", total - 1, total)
     result.summary = summary_text(result)
     (target / SUMMARY_TXT).write_text(result.summary + "\n", encoding="utf-8")
-    page = report_html(runs, result.tables, result.plots, result.warnings, result.context)
+    page = report_html(runs, result.tables, result.plots, result.warnings, result.context, result.replay)
     result.html_path.write_text(page, encoding="utf-8")
     notify("done", total, total)
     return result

@@ -88,9 +88,11 @@ def achieved_motion(
     _check_finite(folder, run[TABLE_DISPLACEMENT], run[TABLE_VELOCITY])
     times, displacement, velocity = _on_tick_grid(folder, run[TIME], run[TABLE_DISPLACEMENT], run[TABLE_VELOCITY],
                                                   1.0 / rate_hz, duration_s)
-    notes = (f"the table motion run {folder} achieved: its measured {TABLE_DISPLACEMENT} and {TABLE_VELOCITY} at "
-             f"{rate_hz:g} Hz, acceleration their velocity's derivative; the twin's table follows it exactly "
-             "(rig.table.model motion_source): the run's shaking, not the table's answer to this controller's forces",)
+    notes: tuple[str, ...] = (
+        f"the table motion run {folder} achieved: its measured {TABLE_DISPLACEMENT} and {TABLE_VELOCITY} at "
+        f"{rate_hz:g} Hz, acceleration their velocity's derivative; the twin's table follows it exactly "
+        "(rig.table.model motion_source): the run's shaking, not the table's answer to this controller's forces",
+    )
     run_profile = run.metadata.get("profile_name")
     if profile_name is not None and run_profile and run_profile != profile_name:
         notes += (f"the run was made with profile {run_profile!r}, this simulation runs {profile_name!r}: the shaking is "

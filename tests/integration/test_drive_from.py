@@ -138,6 +138,8 @@ def test_the_report_gives_the_command_that_replays_the_run_and_the_replay_made_o
     assert f"replayed in {replayed.resolve()}" in out
     summary = (tmp_path / "report_again" / "summary.txt").read_text()
     assert f"harness replay {dry_run}" in summary and f"replayed in {replayed.resolve()}" in summary
+    page = (tmp_path / "report_again" / "report.html").read_text()
+    assert "<h2>Replay</h2>" in page and f"harness replay {dry_run}" in page
     status, out = _cli(capsys, "report", str(replayed), "--out", str(tmp_path / "report_of_replay"))
     assert f"a what-if replay (--set safety.stroke.hard_limit_m=0.097; open loop) of {dry_run.resolve()}" in out
     shutil.rmtree(dry_run.parent / "whatif")
