@@ -37,6 +37,9 @@ examples:
   harness simulate eight_story --record el_centro --pga 0.3 --duration 30 --controller FSF-I --json out.json
   harness simulate eight_story --record el_centro,hachinohe,pacoima --controller FSF-I,OF-I --out study/
       (a batch: one folder per record and controller, and the summary tables)
+  harness simulate --rig-effects --drive-from logs/<RUN> --overlay <OUT>/identified.yaml --controller phi
+      (the twin's table plays the motion that run achieved, its measured x_0 and xdot_0 tick by tick:
+      the new controller, bound or compensation on the shaking the rig really produced)
 """
 
 
@@ -76,6 +79,16 @@ def add_parser(sub) -> None:
         "actuator dynamics and limits, and the safety supervisor (what a dry run should reproduce); "
         "--delay then adds sensor delay: one loop period (e.g. 0.002) mirrors a real-time dry run",
     )
+    control.add_argument(
+        "--drive-from", type=non_empty, metavar="RUN_DIR",
+        help="with --rig-effects: drive the twin's table with the table motion the run in RUN_DIR (a dry run's or "
+        "run's folder) achieved, its measured table displacement and velocity at each tick, in place of the record: "
+        "twin sample k is the run's tick k, so the rate must be the run's (--rate); the table follows that motion "
+        "exactly (rig.table.model motion_source). Closed loop on the twin of the profile given (PROFILE, --overlay "
+        "identified.yaml, --set; a note says so when the run's profile had another name): the structure answers this "
+        "controller, the table does what it did in the run. --duration keeps its first seconds; --record, --records-dir, --pga "
+        "and --time-scale do not apply",
+    )
     output = parser.add_argument_group("output")
     output.add_argument("--json", type=json_file, metavar="PATH",
                         help="write peaks and record facts as JSON (SI units); '-' writes it to standard output (and the "
@@ -91,8 +104,28 @@ def add_parser(sub) -> None:
 def _study_options(args: argparse.Namespace) -> Any:
     return study_options(
         args, controller=args.controller, rate_hz=args.rate, friction=args.friction, transport_delay_s=args.delay,
-        design_stiffness_scale=args.design_stiffness_scale, rig_effects=args.rig_effects,
+        design_stiffness_scale=args.design_stiffness_scale, rig_effects=args.rig_effects, drive_from=args.drive_from,
     )
+
+
+#: The record options a drive from a run's achieved motion replaces, by their attribute on the parsed arguments.
+_RECORD_OPTIONS = {"record": "--record", "records_dir": "--records-dir", "pga": "--pga", "time_scale": "--time-scale"}
+
+
+def _check_drive_from(args: argparse.Namespace) -> None:
+    """Refuse a record option beside ``--drive-from``: the run's achieved motion is the table's drive.
+
+    Raises
+    ------
+    DriveFromError
+        Naming the options given and what ``--drive-from`` expects instead.
+    """
+    from harness.simulation.drive import DriveFromError
+
+    given = [flag for name, flag in _RECORD_OPTIONS.items() if getattr(args, name) is not None]
+    if args.drive_from is not None and given:
+        raise DriveFromError(f"found {', '.join(given)} with --drive-from {args.drive_from}, expected neither: the "
+                             "table motion that run achieved replaces the record (--duration keeps its first seconds)")
 
 
 def run(args: argparse.Namespace, console: Console) -> int:
@@ -100,6 +133,7 @@ def run(args: argparse.Namespace, console: Console) -> int:
     from harness.runs.simulate_batch import split_list
 
     console = json_console(console, args.json)
+    _check_drive_from(args)
     check_json_target(args.json, args.force)
     profile = load_profile(args.profile, variant=args.variant, overrides=args.overrides, overlay=args.overlay)
     check_run_length(profile, args)

@@ -235,7 +235,7 @@ def _out_folder(out_dir: Path, recorded: RecordedRun, profile: Profile, changes:
     metadata.update(
         total_weight_N=profile.structure.total_weight_N, stroke_soft_limit_m=stroke.soft_limit_m,
         stroke_hard_limit_m=stroke.hard_limit_m, force_limit_N=force.max_force_N,
-        replay_of=str(recorded.path), what_if=list(changes), open_loop=bool(changes),
+        replay_of=str(recorded.path.resolve()), what_if=list(changes), open_loop=bool(changes),
     )
     kind = recorded.metadata.get("kind", "dry-run")
     return RunFolder.create(out_dir, f"{profile.name}_replay", kind, profile.resolved_data(), CONTROL_ROW,

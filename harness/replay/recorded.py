@@ -18,10 +18,8 @@ import numpy as np
 from harness.errors import HarnessError
 from harness.loop.tick_log import CAN_FRAMES, TICK_COLUMNS
 from harness.recording.layout import CAN_FILE, EVENTS_FILE, METADATA_FILE, PROFILE_FILE, TICKS_FILE
+from harness.recording.replayable import replay_refusal
 from harness.replay.canlog import LoggedFrame, read_can_log
-
-#: The version of the replay record this harness reads (metadata ``replay.version``).
-REPLAY_VERSION = 1
 
 
 class ReplayRefused(HarnessError, ValueError):
@@ -107,27 +105,7 @@ def _metadata(folder: Path) -> dict[str, Any]:
 
 
 def _check_replayable(folder: Path, metadata: dict[str, Any]) -> None:
-    """Refuse what replay cannot run again exactly, saying why."""
-    kind = metadata.get("kind")
-    if kind not in ("dry-run", "run"):
-        raise ReplayRefused(f"{folder}: found a run of kind {kind!r}, expected a run of the control loop (dry-run or run)")
-    replay = metadata.get("replay")
-    if not isinstance(replay, dict) or not (folder / TICKS_FILE).is_file():
-        raise ReplayRefused(
-            f"{folder}: logged before replay existed: it has no tick record ({TICKS_FILE}, metadata 'replay'), so which "
-            "frames each tick consumed is not known; only runs recorded by this harness version or later can be replayed")
-    if replay.get("version") != REPLAY_VERSION:
-        raise ReplayRefused(f"{folder}: found replay record version {replay.get('version')!r}, expected {REPLAY_VERSION}")
-    if not replay.get("profile_controller", False):
-        raise ReplayRefused(f"{folder}: the run commanded an identification's excitation, not the profile's controller; "
-                            "replay rebuilds the profile's controller only")
-    outcome = metadata.get("outcome")
-    if outcome not in ("completed", "stopped", "tripped"):
-        raise ReplayRefused(f"{folder}: found outcome {outcome!r}, expected a run whose loop finished "
-                            "(completed, stopped or tripped)")
-    if not metadata.get("record_complete"):
-        raise ReplayRefused(f"{folder}: its record is incomplete (metadata record_complete false): frames or ticks are "
-                            "missing, so the ticks cannot be replayed exactly")
-    can = metadata.get("files", {}).get("can")
-    if can != CAN_FILE or not (folder / CAN_FILE).is_file():
-        raise ReplayRefused(f"{folder}: found no {CAN_FILE}, expected the run's CAN log")
+    """Refuse what replay cannot run again exactly, saying why (:func:`harness.recording.replayable.replay_refusal`)."""
+    refusal = replay_refusal(folder, metadata)
+    if refusal:
+        raise ReplayRefused(refusal)

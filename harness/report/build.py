@@ -36,6 +36,7 @@ from harness.report.labels import file_slug, with_labels
 from harness.report.peak_table import PeakTable
 from harness.report.plots import PLOT_NAMES, PLOTS, PlotOptions
 from harness.report.reference import reference_tables, target_motion_table
+from harness.report.replay_link import replay_links
 from harness.report.result import ReportResult
 from harness.report.summary import summary_text
 from harness.report.table_check import run_table_check
@@ -209,7 +210,8 @@ def build_report(
     target = Path(out_dir) if out_dir is not None else Path(run_paths[0]) / "report"
     target.mkdir(parents=True, exist_ok=True)
     _remove_previous(target)
-    result = ReportResult(out_dir=target, html_path=target / REPORT_HTML, runs=runs, warnings=_record_warnings(runs))
+    result = ReportResult(out_dir=target, html_path=target / REPORT_HTML, runs=runs, warnings=_record_warnings(runs),
+                          replay=replay_links(runs))
     notify("computing peak tables", 1, total)
     result.tables = build_tables(runs)
     result.context = build_context(runs)
@@ -224,7 +226,7 @@ def build_report(
     notify("writing HTML", total - 1, total)
     result.summary = summary_text(result)
     (target / SUMMARY_TXT).write_text(result.summary + "\n", encoding="utf-8")
-    page = report_html(runs, result.tables, result.plots, result.warnings, result.context)
+    page = report_html(runs, result.tables, result.plots, result.warnings, result.context, result.replay)
     result.html_path.write_text(page, encoding="utf-8")
     notify("done", total, total)
     return result

@@ -36,6 +36,14 @@ def data_uri(plot: PlotFile) -> str:
     return "data:image/png;base64," + base64.b64encode(plot.path.read_bytes()).decode("ascii")
 
 
+def _replay_section(lines: Sequence[str]) -> str:
+    """The replay lines under their own heading, as preformatted text (the command copies as it is); "" if none."""
+    if not lines:
+        return ""
+    body = "\n".join(escape(line) for line in lines[1:])  # the first line is the summary's heading
+    return f"<h2>Replay</h2><pre>{body}</pre>"
+
+
 def _runs_section(runs: Sequence[RunData]) -> str:
     names = ("Run", "Folder", "Kind", "Outcome", "Controller", "Record", "Start (UTC)", "Ticks", "Dropped rows")
     header = "<tr>" + "".join(f"<th>{name}</th>" for name in names) + "</tr>"
@@ -82,6 +90,7 @@ def _figure_html(plot: PlotFile) -> str:
 def report_html(
     runs: Sequence[RunData], tables: Sequence[PeakTable], plots: Sequence[PlotFile], warnings: Sequence[str],
     context: Sequence[TextTable] = (),
+    replay: Sequence[str] = (),
 ) -> str:
     """The whole report page.
 
@@ -96,6 +105,8 @@ def report_html(
         Shown in a highlighted box at the top.
     context : sequence of TextTable
         Record, table motion, controller, timing, events: after the peak tables.
+    replay : sequence of str
+        How the runs link to their replays (:mod:`harness.report.replay_link`): after the runs, as text.
     """
     made = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
     shared = common_facts(runs)
@@ -108,6 +119,7 @@ def report_html(
         f"Runs are labelled by what differs between them.</p>",
         warn,
         _runs_section(runs),
+        _replay_section(replay),
         "<h2 class='part'>Peak tables</h2>",
         *(table.to_html().replace("<h2>", "<h3>").replace("</h2>", "</h3>") for table in tables),
         "<h2 class='part'>What the runs were run with</h2>" if context else "",

@@ -41,6 +41,9 @@ class ReportResult:
         Incomplete runs, torn files, mismatched records ...
     summary : str
         Plain-text summary (``summary.txt``; the console prints it at its own width).
+    replay : list of str
+        How each run links to its replay (:mod:`harness.report.replay_link`): the command that
+        replays it and the replays found, or why it cannot be replayed; [] where no run has a replay.
     """
 
     out_dir: Path
@@ -52,3 +55,4 @@ class ReportResult:
     table_files: list[Path] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     summary: str = ""
+    replay: list[str] = field(default_factory=list)

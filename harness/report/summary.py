@@ -32,7 +32,7 @@ def summary_text(result: ReportResult, width: int | None = None) -> str:
         Longest line for a table or a paragraph (the terminal's columns); None: no limit.
         Paths are never cut.
     """
-    lines = _run_lines(result, width)
+    lines = _run_lines(result, width) + result.replay
     if result.warnings:
         lines.append("Warnings:")
         for warning in result.warnings:

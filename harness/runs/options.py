@@ -38,6 +38,8 @@ class StudyOptions:
     transport_delay_s: float | None = None
     design_stiffness_scale: float | None = None
     rig_effects: bool = False
+    #: A run folder whose achieved table motion drives the rig twin (``--drive-from``) in place of the record.
+    drive_from: str | None = None
 
 
 def resolve_profile(profile: Profile, options: StudyOptions) -> Profile:

@@ -36,6 +36,7 @@ from harness.profile import Profile
 from harness.realtime.host import Scheduling, request_fifo, restore_scheduling
 from harness.recording import RunFolder
 from harness.recording.layout import Outcome, RunKind
+from harness.recording.replayable import REPLAY_VERSION
 from harness.recording.runfolder import check_log_dir
 from harness.recording.space import RunSize, check_log_space, run_size
 from harness.runs.loop_rate import check_loop_rate
@@ -203,9 +204,6 @@ def _metadata(profile: Profile, settings: SessionSettings) -> dict:
     }
 
 
-#: The version of what a run folder keeps for ``harness replay`` (metadata ``replay``, ``ticks.bin``).
-REPLAY_FORMAT_VERSION = 1
-
 
 def _replay_facts(settings: SessionSettings, profile_controller: bool) -> dict:
     """What ``harness replay`` needs besides the profile, the CAN log and the tick record.
@@ -213,7 +211,7 @@ def _replay_facts(settings: SessionSettings, profile_controller: bool) -> dict:
     ``profile_controller`` is False for an identification's excitation, which replay does not rebuild.
     """
     return {
-        "version": REPLAY_FORMAT_VERSION,
+        "version": REPLAY_VERSION,  # the one harness replay reads (harness/recording/replayable.py)
         "duration_s": settings.duration_s,
         "table_check": settings.table_record is not None,
         "table_check_off": "" if settings.table_record is not None else settings.table_check_off,

@@ -103,6 +103,24 @@ def sampling_settings(profile: Profile) -> SamplingSettings:
                             friction_source=control.friction)
 
 
+def _study_motion(profile: Profile, options: StudyOptions) -> tuple[GroundMotion, Profile]:
+    """The table motion of a study and the profile it runs on.
+
+    The profile's record, processed and checked against the table; or, with ``options.drive_from``,
+    the table motion that run achieved (:mod:`harness.simulation.drive`), which the twin's table
+    then follows exactly (a motion source).
+    """
+    if options.drive_from is None:
+        return prepare_motion(profile), profile
+    from harness.simulation.drive import DriveFromError, achieved_motion, driven_profile
+
+    if not options.rig_effects:
+        raise DriveFromError(f"--drive-from {options.drive_from} drives the rig twin with the table motion a run "
+                             "achieved, expected --rig-effects with it (the ideal simulation has no rig)")
+    motion = achieved_motion(options.drive_from, profile.control.rate_hz, options.duration_s, profile.name)
+    return motion, driven_profile(profile)
+
+
 def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, float], None] | None = None) -> StudyResult:
     """Simulate the passive case and (unless the controller is 'none') the controlled case.
 
@@ -119,9 +137,15 @@ def run_study(profile: Profile, options: StudyOptions, progress: Callable[[str, 
     options : StudyOptions
     progress : callable, optional
         ``progress(case_name, fraction)``.
+
+    Raises
+    ------
+    DriveFromError
+        ``options.drive_from`` names a folder that cannot drive the twin (with the reason and what
+        was expected), or is given without ``options.rig_effects``.
     """
     profile = resolve_profile(profile, options)
-    motion = prepare_motion(profile)
+    motion, profile = _study_motion(profile, options)
     settings = sampling_settings(profile)
     scale = profile.control.design_stiffness_scale
     name = NO_CONTROLLER if options.controller == NO_CONTROLLER else profile.control.controller

@@ -105,7 +105,9 @@ def run_rig_twin(
         their samples), the plant's true bearing state, the supervised command
         ``force_command_N`` and the actuator force ``force_measured_N``; peaks of those;
         ``extra["outcome"]``, ``extra["trip_reason"]`` and the true responses
-        (``extra["true_peaks"]``); ``extra["state_source"]`` says what the controller read.
+        (``extra["true_peaks"]``); the table's true motion at each sample (``extra["true_table"]``:
+        displacement m, velocity m/s, acceleration m/s^2, by column name); ``extra["state_source"]``
+        says what the controller read.
 
     Raises
     ------
@@ -266,6 +268,7 @@ def _twin_result(
     ending = run_ending(supervisor, record_ended=True)  # as a dry run's: a check's safe stop is "stopped", with the check's name
     extra: dict[str, object] = {
         "outcome": ending.outcome, "trip_reason": ending.reason, "true_peaks": peak_responses(true_columns, total_weight_N),
+        "true_table": {name: true_columns[name] for name in layout.TABLE},
     }
     if rig.table.seized:  # a seize fault (rig.faults): the sliding velocity it stopped
         extra["seized_at_velocity_m_s"] = rig.table.seized_at_velocity_m_s

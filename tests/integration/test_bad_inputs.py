@@ -92,6 +92,18 @@ RATE_RANGE = "expected a number of Hz in (0, 5000]"
 DURATION_RANGE = "expected a number of s in (0, 600]"
 #: (arguments, what the message must say); ``{tmp}`` is a folder prepared by the ``inputs`` fixture.
 BAD_ARGUMENTS = {
+    # harness simulate --drive-from (issue 34): what the twin is driven from, refused with what was expected
+    "drive_from_a_folder_that_is_no_run": (
+        ["simulate", "--rig-effects", "--drive-from", "{tmp}/folder"],
+        ["--drive-from", "found no metadata.json", "`harness dry-run` or `harness run`"],
+    ),
+    "drive_from_without_rig_effects": (
+        ["simulate", "--drive-from", "{tmp}/folder"], ["--drive-from", "expected --rig-effects with it"],
+    ),
+    "drive_from_with_a_record": (
+        ["simulate", "--rig-effects", "--drive-from", "{tmp}/folder", "--pga", "0.2"],
+        ["found --pga with --drive-from", "replaces the record"],
+    ),
     # crashed with a traceback (exit 1)
     "simulate_negative_rate": (["simulate", "--rate", "-500"], ["--rate", "found -500 Hz", RATE_RANGE]),
     "e2e_window_of_a_billion": (
