@@ -1,10 +1,10 @@
 """``harness replay``: every kind of dry-run outcome replays bit for bit from its own log (issue 34).
 
-Completed, tripped by injected faults, stopped by the operator, and a real-time run that rode
-through a stall: each replays with every frame it sent identical (force, enable, counter, CRC) and
-the recorded outcome. A what-if with a tighter stroke bound reports the earlier trip it would have
-caused; a run logged before replay existed is refused; a run whose log was altered is not replayed
-as identical.
+Completed, stopped by the operator, and a real-time run that rode through a stall: each replays
+with every frame it sent identical (force, enable, counter, CRC) and the recorded outcome. A what-if
+with a tighter stroke bound reports the earlier trip it would have caused; a run logged before
+replay existed is refused; a run whose log was altered is not replayed as identical. Every injected
+fault's tripped run replays in tests/integration/test_fault_injection.py, which makes those runs.
 """
 
 from __future__ import annotations
@@ -24,49 +24,13 @@ from harness import exit_codes
 from harness.cli import main
 from harness.loop.tick_log import MISSED, STALL, TICK_COLUMNS
 from harness.recording import load_run
-
-FAULT_AT_S = 1.0
-#: Injected faults (tests/integration/test_fault_injection.py gives each one's bound) and the reason each trips with.
-FAULTS = {
-    "table_dropout": ("{kind: dropout, target: TABLE_SENSORS}", "sensor_stale"),
-    "table_bad_crc": ("{kind: corrupt_crc, target: TABLE_SENSORS}", "e2e_rejects"),
-    "estop": ("{kind: estop}", "estop"),
-}
+from tests.replay_checks import assert_identical, ending, replay, tick_records
 
 
 def _dry_run(log_dir: Path, *args: str) -> tuple[int, Path]:
     status = main(["dry-run", "--log-dir", str(log_dir), "--quiet", *args])
     (folder,) = [p for p in log_dir.iterdir() if p.is_dir()]
     return status, folder
-
-
-def _replay(capsys, folder: Path, *args: str) -> tuple[int, str]:
-    capsys.readouterr()
-    status = main(["replay", str(folder), *args])
-    captured = capsys.readouterr()
-    return status, captured.out + captured.err
-
-
-def _tick_records(folder: Path) -> np.ndarray:
-    """The run's tick record, its start mark removed."""
-    return np.fromfile(folder / "ticks.bin", dtype="<f8").reshape(-1, len(TICK_COLUMNS))[1:]
-
-
-def _assert_identical(capsys, folder: Path) -> str:
-    status, out = _replay(capsys, folder)
-    n = len(_tick_records(folder))
-    assert n == len(load_run(folder)["t_s"]) > 0  # one record per row of the run
-    assert status == exit_codes.OK, out
-    assert f"replayed {n} ticks: {n} identical" in out, out
-    return out
-
-
-def _ending(folder: Path) -> tuple[str, str, float]:
-    """The run's outcome, reason and the time of the event that ended it (from its own files)."""
-    metadata = json.loads((folder / "metadata.json").read_text())
-    reason = metadata["trip_reason"] or ""
-    t = next((float(e["t_s"]) for e in load_run(folder).events if e["name"] == reason), float("nan")) if reason else 0.0
-    return metadata["outcome"], reason, t
 
 
 @pytest.fixture(scope="module")
@@ -77,21 +41,8 @@ def completed(tmp_path_factory) -> Path:
 
 
 def test_a_completed_lockstep_dry_run_replays_bit_for_bit(completed, capsys):
-    out = _assert_identical(capsys, completed)
+    out = assert_identical(capsys, completed)
     assert "recorded outcome: completed" in out and "replayed outcome: completed" in out
-
-
-@pytest.mark.parametrize("case", sorted(FAULTS))
-def test_a_tripped_dry_run_replays_bit_for_bit_with_its_trip(tmp_path, capsys, case):
-    spec, reason = FAULTS[case]
-    fault = spec[:-1] + f", start_s: {FAULT_AT_S}}}"
-    status, folder = _dry_run(tmp_path, "--lockstep", "--duration", "2", "--set", f"rig.faults=[{fault}]")
-    assert status == exit_codes.TRIPPED
-    outcome, recorded_reason, t = _ending(folder)
-    assert (outcome, recorded_reason) == ("tripped", reason)
-    out = _assert_identical(capsys, folder)
-    for which in ("recorded", "replayed"):
-        assert f"{which} outcome: tripped ({reason}) at t = {t:.3f} s: fault {reason}" in out, out
 
 
 def _interrupt_once_running(log_dir: Path, after_s: float) -> threading.Thread:
@@ -113,8 +64,8 @@ def test_an_operator_stop_replays_bit_for_bit(tmp_path, capsys):
     _interrupt_once_running(tmp_path, 0.3)
     status, folder = _dry_run(tmp_path, "--lockstep", "--duration", "20")
     assert status == exit_codes.STOPPED
-    assert _tick_records(folder)[:, TICK_COLUMNS.index("operator_stop")].any()  # the request is in the record
-    out = _assert_identical(capsys, folder)
+    assert tick_records(folder)[:, TICK_COLUMNS.index("operator_stop")].any()  # the request is in the record
+    out = assert_identical(capsys, folder)
     assert "recorded outcome: stopped" in out and "replayed outcome: stopped" in out
 
 
@@ -139,16 +90,16 @@ def test_a_real_time_dry_run_that_rides_through_a_stall_replays_bit_for_bit(tmp_
     monkeypatch.undo()
     if status == exit_codes.INPUT_ERROR and json.loads((folder / "metadata.json").read_text())["outcome"] == "refused":
         pytest.skip("the pre-flight check found this host unable to hold 500 Hz now (loaded): no real-time run to replay")
-    ticks = _tick_records(folder)
+    ticks = tick_records(folder)
     assert (ticks[:, MISSED] >= 1).any() and (ticks[1:, STALL] > 0).all()  # real time: stalls measured, one ridden through
-    out = _assert_identical(capsys, folder)
-    outcome, reason, _ = _ending(folder)
+    out = assert_identical(capsys, folder)
+    outcome, reason, _ = ending(folder)
     assert f"recorded outcome: {outcome}" in out and f"replayed outcome: {outcome}" in out
 
 
 def test_a_tighter_stroke_bound_reports_the_earlier_trip_it_would_have_caused(completed, capsys, tmp_path):
     hard_m, stop_time_s = 0.012, 0.05
-    status, out = _replay(capsys, completed, "--set", "safety.stroke.soft_limit_m=0.008", "--set",
+    status, out = replay(capsys, completed, "--set", "safety.stroke.soft_limit_m=0.008", "--set",
                           "safety.stroke.fade_band_m=0.002", "--set", f"safety.stroke.hard_limit_m={hard_m}",
                           "--set", f"safety.stroke.stop_time_s={stop_time_s}", "--out", str(tmp_path / "whatif"))
     assert status == exit_codes.OK, out
@@ -186,7 +137,7 @@ def test_a_run_logged_before_replay_existed_is_refused(completed, tmp_path, caps
         metadata.pop(key)
     metadata["files"].pop("ticks")
     (old / "metadata.json").write_text(json.dumps(metadata))
-    status, out = _replay(capsys, old)
+    status, out = replay(capsys, old)
     assert status == exit_codes.INPUT_ERROR
     assert "logged before replay existed" in out
 
@@ -196,7 +147,7 @@ def test_a_run_whose_sent_frame_was_altered_is_not_replayed_as_identical(complet
     altered = tmp_path / completed.name
     shutil.copytree(completed, altered)
     lines = (altered / "can.log").read_text().splitlines(keepends=True)
-    ticks = _tick_records(altered)
+    ticks = tick_records(altered)
     k = len(ticks) // 2
     start, end = int(ticks[k - 1, -1]), int(ticks[k, -1])
     at = next(i for i in range(start, end) if " 020#" in lines[i] and lines[i].rstrip().endswith("T"))
@@ -205,7 +156,7 @@ def test_a_run_whose_sent_frame_was_altered_is_not_replayed_as_identical(complet
     flipped = f"{int(hex_data[-2:], 16) ^ 0x01:02X}"
     lines[at] = f"{head}#{hex_data[:-2]}{flipped} {direction}\n"
     (altered / "can.log").write_text("".join(lines))
-    status, out = _replay(capsys, altered)
+    status, out = replay(capsys, altered)
     assert status == exit_codes.INTERNAL_ERROR, out
     assert f"first differing tick: {k} " in out
     assert "run sent:    ACTUATOR_CMD" in out and "replay sent: ACTUATOR_CMD" in out

@@ -13,8 +13,8 @@ from types import SimpleNamespace
 import pytest
 
 from harness import exit_codes
-from harness.loop.runner import ArmTimeout, ControlLoop
 from harness.loop.preflight import MIN_IDLE_CORES, HostTiming, HostTimingRefused
+from harness.loop.runner import ArmTimeout, ControlLoop
 from harness.realtime.host import Scheduling
 from tests import realtime_runs
 from tests.realtime_runs import QuietWait, refused_by_preflight, run_real_time, summary_line, wait_for_quiet_second
@@ -81,7 +81,9 @@ def test_a_refusal_to_arm_after_the_loops_own_stall_counts_as_refused():
     """The host stopped the loop while it armed (CI: 126 ms inside User-Mode Linux): nothing moved, run again."""
     text = _arm_refusal_text(0.126)
     assert refused_by_preflight(_done(exit_codes.INPUT_ERROR, err=text))
-    assert realtime_runs.FIGURES.search(text).group(0) == "the loop itself stalled 126.0 ms up to t = 0.370 s, past its 80.0 ms stall budget (a drive's watchdog fault after it is the stall's)"
+    assert realtime_runs.FIGURES.search(text).group(0) == (
+        "the loop itself stalled 126.0 ms up to t = 0.370 s, past its 80.0 ms stall budget "
+        "(a drive's watchdog fault after it is the stall's)")
 
 
 def test_a_refusal_to_arm_for_any_other_cause_is_the_tests_to_judge():
