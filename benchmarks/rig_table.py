@@ -192,6 +192,14 @@ FEEDFORWARD_COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 
 
+def _ideal(profile_path: Path, records_dir: str, overrides: list[str], record: str, pga_g: float
+           ) -> tuple[StudyOptions, dict]:
+    """A record's study options (time scale 2, 30 s) and its ideal passive and controlled peaks."""
+    options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0, duration_s=30.0)
+    ideal = run_study(load_profile(profile_path, overrides=overrides), options)
+    return options, {"passive": ideal.cases["passive"].peaks.flatten(), IDEAL: ideal.cases["controlled"].peaks.flatten()}
+
+
 def feedforward_results(profile_path: Path, records_dir: str, overrides: list[str]) -> dict:
     """Per record: ideal passive and controlled peaks, and each :data:`FEEDFORWARD_COLUMNS` case on the lockstep twin.
 
@@ -200,10 +208,7 @@ def feedforward_results(profile_path: Path, records_dir: str, overrides: list[st
     """
     results: dict = {}
     for record, pga_g in RIG_RECORDS:
-        options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0, duration_s=30.0)
-        ideal = run_study(load_profile(profile_path, overrides=overrides), options)
-        results[record] = {"passive": ideal.cases["passive"].peaks.flatten(),
-                           IDEAL: ideal.cases["controlled"].peaks.flatten()}
+        options, results[record] = _ideal(profile_path, records_dir, overrides, record, pga_g)
         for name, extra in FEEDFORWARD_COLUMNS:
             profile = load_profile(profile_path, overrides=[*overrides, *extra])
             study = run_study(profile, dataclasses.replace(options, rig_effects=True))
@@ -266,10 +271,7 @@ def feedforward_dry_run_results(profile_path: Path, records_dir: str, overrides:
     """
     results: dict = {}
     for record, pga_g in RIG_RECORDS:
-        options = StudyOptions(record=record, records_dir=records_dir, pga_g=pga_g, time_scale=2.0, duration_s=30.0)
-        ideal = run_study(load_profile(profile_path, overrides=overrides), options)
-        results[record] = {"passive": ideal.cases["passive"].peaks.flatten(),
-                           IDEAL: ideal.cases["controlled"].peaks.flatten()}
+        options, results[record] = _ideal(profile_path, records_dir, overrides, record, pga_g)
         for name, extra in FEEDFORWARD_DRY_RUN_COLUMNS:
             profile = load_profile(profile_path, overrides=[*overrides, *extra])
             run = _dry_run_past_the_preflight(profile, DryRunOptions(

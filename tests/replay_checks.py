@@ -7,6 +7,7 @@ Shared by tests/integration/test_replay.py and the fault-injection dry runs
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -55,3 +56,16 @@ def assert_trip_replayed(capsys, folder: Path, reason: str) -> None:
     out = assert_identical(capsys, folder)
     for which in ("recorded", "replayed"):
         assert f"{which} outcome: tripped ({reason}) at t = {t:.3f} s: fault {reason}" in out, out
+
+
+def logged_before_replay(folder: Path, into: Path) -> Path:
+    """A copy of run ``folder`` in ``into`` as a run logged before replay existed: no tick record, nor its metadata."""
+    old = into / folder.name
+    shutil.copytree(folder, old)
+    (old / "ticks.bin").unlink()
+    metadata = json.loads((old / "metadata.json").read_text())
+    for key in ("replay", "tick_columns"):
+        metadata.pop(key)
+    metadata["files"].pop("ticks")
+    (old / "metadata.json").write_text(json.dumps(metadata))
+    return old

@@ -22,6 +22,7 @@ from harness.recording import load_run
 from harness.runs.options import StudyOptions
 from harness.runs.simulate import run_study
 from harness.signals.columns import TABLE_DISPLACEMENT, TABLE_VELOCITY, TIME
+from tests.replay_checks import logged_before_replay
 
 
 @pytest.fixture(scope="module")
@@ -146,13 +147,7 @@ def test_the_report_gives_the_command_that_replays_the_run_and_the_replay_made_o
 
 
 def test_the_report_of_a_run_logged_before_replay_says_it_cannot_be_replayed(dry_run, capsys, tmp_path):
-    old = _copy(dry_run, tmp_path)
-    (old / "ticks.bin").unlink()
-    metadata = json.loads((old / "metadata.json").read_text())
-    for key in ("replay", "tick_columns"):
-        metadata.pop(key)
-    metadata["files"].pop("ticks")
-    (old / "metadata.json").write_text(json.dumps(metadata))
+    old = logged_before_replay(dry_run, tmp_path)
     status, out = _cli(capsys, "report", str(old), "--out", str(tmp_path / "report"))
     assert status == exit_codes.OK, out
     assert "replay is not possible: logged before replay existed: it has no tick record (ticks.bin" in out

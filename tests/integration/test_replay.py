@@ -24,7 +24,7 @@ from harness import exit_codes
 from harness.cli import main
 from harness.loop.tick_log import MISSED, STALL, TICK_COLUMNS
 from harness.recording import load_run
-from tests.replay_checks import assert_identical, ending, replay, tick_records
+from tests.replay_checks import assert_identical, ending, logged_before_replay, replay, tick_records
 
 
 def _dry_run(log_dir: Path, *args: str) -> tuple[int, Path]:
@@ -129,14 +129,7 @@ def test_a_tighter_stroke_bound_reports_the_earlier_trip_it_would_have_caused(co
 
 
 def test_a_run_logged_before_replay_existed_is_refused(completed, tmp_path, capsys):
-    old = tmp_path / completed.name
-    shutil.copytree(completed, old)
-    (old / "ticks.bin").unlink()
-    metadata = json.loads((old / "metadata.json").read_text())
-    for key in ("replay", "tick_columns"):
-        metadata.pop(key)
-    metadata["files"].pop("ticks")
-    (old / "metadata.json").write_text(json.dumps(metadata))
+    old = logged_before_replay(completed, tmp_path)
     status, out = replay(capsys, old)
     assert status == exit_codes.INPUT_ERROR
     assert "logged before replay existed" in out
