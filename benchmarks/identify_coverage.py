@@ -9,7 +9,13 @@ ratios, three story stiffnesses, the story model's first-mode damping ratio) it 
 seeds whose stated 95 % interval (:func:`harness.identification.fit_statistics.interval_95`) holds the truth, and
 prints a markdown table: covered seeds, the mean error and the mean stated half-width.
 
-Usage: python benchmarks/identify_coverage.py [--seeds N] [--duration S] [--workers W] [--out DIR]
+With ``--bearing``, the README's bearing step instead: ``harness dry-run --lockstep --duration S
+--set record.seed=SEED`` (the default synthetic record, its seed varied: the base mat slides), then
+``harness identify bearing`` on its run folder, against the shipped bearing (``mu_max``,
+``mu_delta``, ``a_mu``, ``D_y``). Its intervals are value -/+ 1.96 standard errors (its errors
+are the larger of the Jacobian's and the blocks' over 8 stretches of the record).
+
+Usage: python benchmarks/identify_coverage.py [--bearing] [--seeds N] [--duration S] [--workers W] [--out DIR]
 """
 
 from __future__ import annotations
@@ -26,7 +32,9 @@ sys.path.insert(0, str(REPO))
 import numpy as np  # noqa: E402
 
 from harness.cli import main  # noqa: E402
+from harness.identification.bearing import identify_bearing  # noqa: E402
 from harness.identification.fit_statistics import t_factor_95  # noqa: E402
+from harness.identification.friction_fit import PARAMETERS  # noqa: E402
 from harness.identification.structure import identify_structure  # noqa: E402
 from harness.model.building import fixed_base_modes  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
@@ -41,6 +49,31 @@ def truth() -> dict[str, float]:
     values |= {f"story {j + 1} stiffness (N/m)": float(k) for j, k in enumerate(structure.story_stiffness_N_per_m)}
     values["first-mode damping ratio (story model)"] = float(structure.first_mode_damping_ratio or np.nan)
     return values
+
+
+#: Labels of the bearing's identified values, in the order of the fit's PARAMETERS (the profile's attributes).
+BEARING_LABELS = ("mu_max", "mu_delta", "a_mu (s/m)", "D_y (m)")
+
+
+def bearing_truth() -> dict[str, float]:
+    """The shipped profile's bearing: what the virtual rig runs when no ``rig.truth`` is set."""
+    bearing = load_profile().bearing
+    return {label: float(getattr(bearing, name)) for label, name in zip(BEARING_LABELS, PARAMETERS, strict=True)}
+
+
+def one_bearing_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, float]]:
+    """(identified, standard error) per bearing value for one seed of the synthetic record."""
+    seed, duration_s, out = job
+    logs = out / f"bearing{seed}"
+    if not logs.is_dir():
+        status = main(["dry-run", "--lockstep", "--quiet", "--log-dir", str(logs), "--duration", f"{duration_s:g}",
+                       "--set", f"record.seed={seed}"])
+        if status not in (0, 4):
+            raise SystemExit(f"seed {seed}: dry run ended with exit status {status}")
+    (folder,) = [p for p in logs.iterdir() if (p / "metadata.json").is_file()]
+    fit = identify_bearing([folder], out / f"identb{seed}", force=True).fit
+    return {label: (fit.estimates[name].value, fit.estimates[name].standard_error)
+            for label, name in zip(BEARING_LABELS, PARAMETERS, strict=True)}
 
 
 def one_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, float]]:
@@ -63,11 +96,13 @@ def one_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, float]]:
     return {k: (float(v), float(se)) for k, (v, se) in values.items()}
 
 
-def table(results: list[dict[str, tuple[float, float]]]) -> str:
-    t = t_factor_95()
+def table(results: list[dict[str, tuple[float, float]]], truths: dict[str, float] | None = None,
+          t: float | None = None) -> str:
+    truths = truth() if truths is None else truths
+    t = t_factor_95() if t is None else t
     lines = [f"| value | truth | covered (of {len(results)}) | mean error | largest error | mean stated 95 % half-width |",
              "|---|---:|---:|---:|---:|---:|"]
-    for name, true in truth().items():
+    for name, true in truths.items():
         found = np.array([r[name][0] for r in results])
         half = t * np.array([r[name][1] for r in results])
         covered = int(np.count_nonzero(np.abs(found - true) <= half))
@@ -83,8 +118,15 @@ def run(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=30.0, help="white-noise dry run length (s)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=None, help="where the run folders go (default: temp)")
+    parser.add_argument("--bearing", action="store_true", help="the bearing step (synthetic record) instead")
     args = parser.parse_args(argv)
     out = args.out or Path(tempfile.mkdtemp(prefix="identify-coverage-"))
+    if args.bearing:
+        with ProcessPoolExecutor(args.workers) as pool:
+            results = list(pool.map(one_bearing_seed, [(seed, args.duration, out) for seed in range(args.seeds)]))
+        print(table(results, bearing_truth(), 1.96))
+        print(f"\n{args.seeds} seeds, {args.duration:g} s lockstep dry runs of the synthetic record; run folders in {out}")
+        return 0
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(one_seed, [(seed, args.duration, out) for seed in range(args.seeds)]))
     print(table(results))

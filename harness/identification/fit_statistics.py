@@ -92,10 +92,26 @@ def block_covariance(jacobian: np.ndarray, residuals: np.ndarray, block_of_resid
     return bread @ middle @ bread
 
 
-def honest_standard_errors(jacobian: np.ndarray, residuals: np.ndarray, block_of_residual: np.ndarray) -> np.ndarray:
-    """Per parameter, the larger of the Gauss-Newton standard error (residuals' correlation time in) and the blocks' one."""
+def honest_standard_errors(
+    jacobian: np.ndarray, residuals: np.ndarray, block_of_residual: np.ndarray, gradient: np.ndarray | None = None,
+) -> np.ndarray:
+    """Per parameter, the larger of the Gauss-Newton standard error (residuals' correlation time in) and the blocks' one.
+
+    Parameters
+    ----------
+    jacobian : ndarray (N, p)
+        Of the residuals with respect to the fit's parameters.
+    residuals : ndarray (N,)
+    block_of_residual : ndarray (N,) of int
+        Which block of time each residual belongs to (:func:`time_blocks`).
+    gradient : ndarray (q, p), optional
+        The linear map from the fit's parameters to the values reported (their derivatives at the
+        solution); both covariances go through it before the larger is taken. None: the fit's own.
+    """
     model = covariance(jacobian, residuals, correlation_time(residuals))
     data = block_covariance(jacobian, residuals, block_of_residual)
+    if gradient is not None:
+        model, data = gradient @ model @ gradient.T, gradient @ data @ gradient.T
     return np.sqrt(np.maximum(np.maximum(np.diag(model), np.diag(data)), 0.0))
 
 

@@ -32,7 +32,10 @@ Two things make the fit work at the rig's noise:
 The fit is :func:`scipy.optimize.least_squares` (trust-region reflective, bounded), started
 from the profile's values, in parameters that keep the law valid: ``mu_max``,
 ``mu_delta / mu_max`` in [0, 1], the logarithms of ``a_mu`` and ``D_y``, and the delay. Standard errors
-come from its Jacobian (:mod:`harness.identification.fit_statistics`). Whether the data
+come from the data as the structure's do: the larger of the Jacobian's (the residuals' correlation
+time in) and a block sandwich over stretches of each record
+(:func:`~harness.identification.fit_statistics.honest_standard_errors`), both carried to the
+reported values through the derivatives of the change of parameters. Whether the data
 determine a parameter is judged twice: the motion must hold what the parameter shapes
 (:func:`coverage`), and its relative standard error must be below
 :data:`DETERMINED_RELATIVE_ERROR`.
@@ -50,7 +53,7 @@ import numpy as np
 from scipy import optimize, signal
 
 from harness.identification.choices import LOWPASS_HZ
-from harness.identification.fit_statistics import correlation_time, covariance, relative_error
+from harness.identification.fit_statistics import correlation_time, honest_standard_errors, relative_error, time_blocks
 from harness.model.bearing import A_MU, MU_DELTA, MU_MAX, YIELD, BearingConfig, advance_hysteretic
 
 #: The fitted parameters, as the profile's ``bearing`` section names them.
@@ -377,12 +380,13 @@ def fit_friction(
                                       x_scale=np.array([0.01, 0.1, 0.3, 0.3, 0.5]))
     theta = solution.x
     tau = correlation_time(solution.fun)
-    cov_theta = covariance(solution.jac, solution.fun, tau)
-    gradient = np.diag([1.0, 0.0, math.exp(theta[2]), math.exp(theta[3])])
+    gradient = np.zeros((5, 5))  # physical (mu_max, mu_delta, a_mu, D_y) and the delay (ms), from theta
+    gradient[np.diag_indices(5)] = (1.0, 0.0, math.exp(theta[2]), math.exp(theta[3]), 1.0)
     gradient[1, 0], gradient[1, 1] = theta[1], theta[0]  # mu_delta = mu_max * ratio
-    cov = gradient @ cov_theta[:4, :4] @ gradient.T
+    blocks = np.concatenate([time_blocks(len(record.displacement_m)) for record in records])
+    standard_errors = honest_standard_errors(solution.jac, solution.fun, blocks, gradient)
     values = model.physical(theta)
-    errors = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    errors = standard_errors[:4]
     enough = coverage(records, float(values[2]))
     designs = (design.mu_max, design.mu_delta, design.a_mu_s_per_m, design.yield_displacement_m)
     estimates = {}
@@ -395,7 +399,7 @@ def fit_friction(
         estimates[name] = ParameterEstimate(name, float(values[i]), float(errors[i]), float(designs[i]), covered and precise,
                                             reason)
     fitted_forces, fitted_nu = model.response(theta)
-    delay_s, delay_se_s = float(theta[4] * 1e-3), float(math.sqrt(max(cov_theta[4, 4], 0.0)) * 1e-3)
+    delay_s, delay_se_s = float(theta[4] * 1e-3), float(standard_errors[4] * 1e-3)
     bearing = dataclasses.replace(design, mu_max=float(values[0]), mu_delta=float(values[1]), a_mu_s_per_m=float(values[2]),
                                   yield_displacement_m=float(values[3]))
     rms = float(np.sqrt(np.mean(solution.fun**2)))

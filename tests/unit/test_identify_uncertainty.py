@@ -86,6 +86,25 @@ def test_the_block_covariance_is_the_sandwich_of_the_blocks_scores():
     assert t_factor_95(BLOCKS) == pytest.approx(2.3646, abs=1e-3)
 
 
+def test_the_reported_values_errors_carry_both_covariances_through_the_change_of_parameters():
+    """The bearing's fit reports mu_delta = mu_max * ratio and exp(ln a_mu): each covariance goes through the
+    derivatives, then the larger is taken (the larger of the fit's own two, taken first, is not the same)."""
+    rng = np.random.default_rng(1)
+    n = 400
+    jacobian = rng.standard_normal((n, 2))
+    residuals = np.convolve(rng.standard_normal(n + 39), np.ones(40) / np.sqrt(40), mode="valid")
+    blocks = time_blocks(n)
+    gradient = np.array([[1.0, 0.0], [0.7, 3.0]])  # value 2 = 0.7 theta_1 + 3 theta_2
+    model = covariance(jacobian, residuals, correlation_time(residuals))
+    data = block_covariance(jacobian, residuals, blocks)
+    expected = np.sqrt(np.maximum(np.diag(gradient @ model @ gradient.T), np.diag(gradient @ data @ gradient.T)))
+    assert np.allclose(honest_standard_errors(jacobian, residuals, blocks, gradient), expected)
+    assert np.allclose(honest_standard_errors(jacobian, residuals, blocks, np.eye(2)),
+                       honest_standard_errors(jacobian, residuals, blocks))
+    assert np.allclose(honest_standard_errors(jacobian, residuals, blocks, 2.0 * np.eye(2)),
+                       2.0 * honest_standard_errors(jacobian, residuals, blocks))
+
+
 @pytest.fixture(scope="module")
 def design_plant_run(tmp_path_factory):
     """40 s of white_noise:0.5-20 at 0.1 g under the shipped design itself (1 % first-mode damping), measured as the rig does."""
