@@ -91,17 +91,17 @@ def twin_run(record: str, records_dir: str, overrides: tuple[str, ...], delay_s:
     result = run_rig_twin(profile, prepare_motion(profile), 1.0 / PERIOD_S, build_controller_for_rig(profile, "phi"),
                           asynchronous_delay_s=delay_s, compensator=recorder)  # type: ignore[arg-type]
     rows = np.array(recorder.rows)
-    pinned = np.flatnonzero(rows[:, 7] > 0)
+    pinned = np.flatnonzero(rows[:, 8] > 0)
     summary = {"record": record, "asynchrony_ms": delay_s * 1e3, "outcome": result.extra["outcome"],
                "trip_reason": result.extra["trip_reason"], "end_s": float(rows[-1, 0])}
     if pinned.size:
         k = int(pinned[0])
-        names = ("a0", "a1_s", "a2_Ns_per_m")
+        names = ("a0", "a1_s", "a2_Ns_per_m", "a3_kg")
         low = np.array(recorder.compensator._low)
         high = np.array(recorder.compensator._high)
-        at = [i for i in range(3) if rows[k, 4 + i] in (low[i], high[i])]
+        at = [i for i in range(4) if rows[k, 4 + i] in (low[i], high[i])]
         summary.update(first_pinned_s=float(rows[k, 0]), coefficient=names[at[0]] if at else "?",
-                       refused_fit=float(rows[k, 8]))
+                       refused_fit=float(rows[k, 9]))
     return summary, rows
 
 
@@ -184,10 +184,10 @@ def _replay(rows: np.ndarray, force: np.ndarray, velocity: np.ndarray, applied: 
     """Fresh compensator (the shipped settings, started from the model) fed the given inputs: its coefficients and flags."""
     compensator = make_compensator(load_profile(overrides=["control.compensation=adaptive"]), controller="phi")
     assert isinstance(compensator, AdaptiveCompensator)
-    out = np.zeros((rows.shape[0], 4))
+    out = np.zeros((rows.shape[0], 5))
     for k in range(rows.shape[0]):
         compensator._learn(PERIOD_S, force[k], velocity[k], applied[k])
-        out[k, :3], out[k, 3] = compensator.coefficients, compensator.pinned
+        out[k, :4], out[k, 4] = compensator.coefficients, compensator.pinned
     return out
 
 
@@ -219,7 +219,7 @@ def realign(rows: np.ndarray, quiet: tuple[float, float]) -> list[dict]:
         fits = _replay(rows, _shift(force, du), _shift(velocity, dv), _shift(applied, dy))
         results.append({"variant": name, "a2_min_Ns_per_m": float(fits[mask, 2].min()),
                         "a2_max_Ns_per_m": float(fits[mask, 2].max()), "a1_min_s": float(fits[mask, 1].min()),
-                        "ticks_pinned": int(fits[:, 3].sum())})
+                        "ticks_pinned": int(fits[:, 4].sum())})
     return results
 
 

@@ -76,7 +76,7 @@ class ModelCompensationConfig:
 class AdaptiveCompensationConfig:
     """Settings of the adaptive time-series compensator (``control.compensator.adaptive``).
 
-    The command is ``u_c = a0 r + a1 r' + a2 xdot_b``; the bounds state the range of actuators
+    The command is ``u_c = a0 r + a1 r' + a2 xdot_b + a3 xddot_b``; the bounds state the range of actuators
     it may adapt to (harness/control/adaptive_compensation.py derives the defaults).
     """
 
@@ -84,7 +84,7 @@ class AdaptiveCompensationConfig:
         0.004, unit="s", gt=0.0, le=0.1, doc="tau_r: the force is made to follow f_d through a first-order lag of tau_r",
     )
     start: Literal["none", "model"] = field(default="model", metadata={
-        "doc": "the coefficients before the first fit: none (1, 0, 0) or model (1, 1 / w_f, k_h / w_f of rig.actuator)",
+        "doc": "the coefficients before the first fit: none (1, 0, 0, 0) or model (1, 1 / w_f, k_h / w_f of rig.actuator, 0)",
     })
     window_s: float = quantity(2.0, unit="s", gt=0.0, le=10.0, doc="length of the moving window the coefficients are fitted over")
     filter_time_constant_s: float = quantity(
@@ -102,9 +102,16 @@ class AdaptiveCompensationConfig:
     flow_bounds_Ns_per_m: tuple[float, ...] = quantity(
         (0.0, 200_000.0), unit="N*s/m", ge=0.0, min_len=2, doc="[low, high] of a2, the flow term's gain (k_h / w_f)",
     )
+    acceleration_bounds_kg: tuple[float, ...] = quantity(
+        (-400.0, 4000.0), unit="kg", min_len=2,
+        doc="[low, high] of a3, the sliding acceleration's gain: what a lagging feed-forward leaves, a sample's lead (C6)",
+    )
+    clip_tolerance_N: float = quantity(
+        1.0, unit="N", gt=0.0, doc="a clip of the fit that changes the window's command by more than this RMS is pinned (C7)",
+    )
 
     def __post_init__(self) -> None:
-        for name in ("gain_bounds", "lead_bounds_s", "flow_bounds_Ns_per_m"):
+        for name in ("gain_bounds", "lead_bounds_s", "flow_bounds_Ns_per_m", "acceleration_bounds_kg"):
             bounds = getattr(self, name)
             if len(bounds) != 2 or not bounds[0] < bounds[1]:
                 raise ValueError(f"{name} must be [low, high] with low < high, found {list(bounds)}")

@@ -142,12 +142,13 @@ def make_compensator(profile: Profile, method: str | None = None, controller: st
         )
     if method == "adaptive":
         adaptive = profile.control.compensator.adaptive
-        start = (1.0, 0.0, 0.0)
+        start = (1.0, 0.0, 0.0, 0.0)
         if adaptive.start == "model":
             model = _actuator_model(profile)
-            start = (1.0, 1.0 / model.bandwidth_rad_s, model.loop_damping_Ns_per_m)
+            start = (1.0, 1.0 / model.bandwidth_rad_s, model.loop_damping_Ns_per_m, 0.0)
+        learn_above_m_s = profile.bearing.yield_displacement_m / adaptive.filter_time_constant_s  # (C8)
         try:
-            return AdaptiveCompensator(adaptive, 1.0 / profile.control.rate_hz, start)
+            return AdaptiveCompensator(adaptive, 1.0 / profile.control.rate_hz, start, learn_above_m_s)
         except ModelError as err:
             raise ProfileError(str(err), profile.source_path, "control.compensator.adaptive.start") from err
     if method != "model":

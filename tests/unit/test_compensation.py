@@ -287,10 +287,13 @@ def test_a_compensator_on_the_wrong_actuator_model_trips_compensation_fault_and_
 
 
 # ---------------------------------------------------------------- the adaptive compensator
-def _excite(compensator, plant: FirstOrderActuator, seconds: float, period_s: float = DT):
+def _excite(compensator, plant: FirstOrderActuator, seconds: float, period_s: float = DT, feedforward_lag_s: float | None = None):
     """Drive ``plant`` through ``compensator`` with a force of two sines and a sliding velocity of a third.
 
-    Returns the coefficients after each tick (n, 3) and the force error against the reference (n,).
+    ``feedforward_lag_s``: a servo controller's velocity feed-forward cancels the plant's bleed with
+    the velocity delayed by that much (None: no feed-forward), so what it leaves is
+    ``c (xdot_b(t) - xdot_b(t - lag))``. Returns the coefficients after each tick (n, 4) and the
+    force error against the reference (n,).
     """
     meas = Measurements()
     applied = 0.0
@@ -303,21 +306,30 @@ def _excite(compensator, plant: FirstOrderActuator, seconds: float, period_s: fl
         errors.append(plant.force_N - compensator.reference_N)
         wanted = 2_000.0 * math.sin(2.0 * math.pi * 0.7 * t) + 800.0 * math.sin(2.0 * math.pi * 4.1 * t)
         applied = compensator.update(t, period_s, wanted, meas, applied)
-        plant.step(applied, velocity, period_s)
+        bleeding = velocity
+        if feedforward_lag_s is not None:
+            bleeding -= 0.08 * math.sin(2.0 * math.pi * 1.3 * (t - feedforward_lag_s))
+        plant.step(applied, bleeding, period_s)
         history.append(tuple(compensator.coefficients))
     return np.array(history), np.array(errors)
+
+
+def _bounds(settings: AdaptiveCompensationConfig) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    pairs = (settings.gain_bounds, settings.lead_bounds_s, settings.flow_bounds_Ns_per_m, settings.acceleration_bounds_kg)
+    return tuple(pair[0] for pair in pairs), tuple(pair[1] for pair in pairs)
 
 
 def test_the_adaptive_compensator_converges_to_the_inverse_of_a_known_plant_within_its_bounds() -> None:
     settings = AdaptiveCompensationConfig()
     compensator = AdaptiveCompensator(settings, DT)
     history, errors = _excite(compensator, FirstOrderActuator(ACTUATOR), 6.0)
-    a0, a1, a2 = history[-1]
+    a0, a1, a2, a3 = history[-1]
     assert a0 == pytest.approx(1.0, abs=0.03)  # the continuous relation fitted to a plant held over 2 ms samples
     assert a1 == pytest.approx(1.0 / ACTUATOR.bandwidth_rad_s, rel=0.15)  # 8 ms, and half a sample's hold
     assert a2 == pytest.approx(ACTUATOR.loop_damping_Ns_per_m, rel=0.03)  # 94 kN s/m
-    low = (settings.gain_bounds[0], settings.lead_bounds_s[0], settings.flow_bounds_Ns_per_m[0])
-    high = (settings.gain_bounds[1], settings.lead_bounds_s[1], settings.flow_bounds_Ns_per_m[1])
+    # no feed-forward, so no lag to make up for: only the period between the velocity and the load cell it drove, -c T
+    assert a3 == pytest.approx(-ACTUATOR.loop_damping_Ns_per_m * DT, rel=0.15)  # -188 kg
+    low, high = _bounds(settings)
     assert np.all(history >= low) and np.all(history <= high)  # at every tick, not only at the end
     assert not compensator.pinned and not compensator.diverged and compensator.fits > 0
     first, last = errors[: int(0.5 / DT)], errors[-int(1.0 / DT):]
@@ -325,13 +337,46 @@ def test_the_adaptive_compensator_converges_to_the_inverse_of_a_known_plant_with
     assert rms(last) < 0.1 * rms(first)  # from the bare actuator's error (it starts as none) to a tenth of it
 
 
+def test_a_lagging_feedforward_is_fitted_as_the_sliding_accelerations_term() -> None:
+    lag_s = 0.006  # a feed-forward velocity 6 ms old: it leaves c (v - v(t - 6 ms)) ~ c 6 ms xddot_b
+    compensator = AdaptiveCompensator(AdaptiveCompensationConfig(), DT)
+    history, errors = _excite(compensator, FirstOrderActuator(ACTUATOR), 6.0, feedforward_lag_s=lag_s)
+    a0, a1, a2, a3 = history[-1]
+    assert a3 == pytest.approx(ACTUATOR.loop_damping_Ns_per_m * lag_s, rel=0.15)  # 564 kg
+    assert a2 < 0.02 * ACTUATOR.loop_damping_Ns_per_m  # the feed-forward took the flow term
+    assert a0 == pytest.approx(1.0, abs=0.03) and not compensator.pinned
+    rms = lambda x: float(np.sqrt(np.mean(np.square(x))))  # noqa: E731
+    assert rms(errors[-int(1.0 / DT):]) < 0.1 * rms(errors[: int(0.5 / DT)])
+
+
 def test_the_adaptive_compensator_starts_as_none_and_learns_nothing_at_rest() -> None:
     compensator = AdaptiveCompensator(AdaptiveCompensationConfig(), DT)
     meas = Measurements()
     for k in range(1000):
         assert compensator.update(k * DT, DT, 0.0, meas, 0.0) == 0.0
-    assert tuple(compensator.coefficients) == (1.0, 0.0, 0.0) and compensator.fits == 0
+    assert tuple(compensator.coefficients) == (1.0, 0.0, 0.0, 0.0) and compensator.fits == 0
     assert compensator.update(1000 * DT, DT, 500.0, meas, 0.0) == pytest.approx(compensator.reference_N)
+
+
+def test_nothing_is_learnt_while_the_base_mat_slides_slower_than_a_stuck_bearing_can_creep() -> None:
+    """(C8): below ``v_learn`` no sample enters the window; above it they do."""
+    plant = FirstOrderActuator(ACTUATOR)
+    creeping = AdaptiveCompensator(AdaptiveCompensationConfig(), DT, learn_above_m_s=0.1)  # above the 0.08 m/s peak
+    _excite(creeping, plant, 2.0)
+    assert creeping._count == 0 and creeping.fits == 0
+    assert tuple(creeping.coefficients) == (1.0, 0.0, 0.0, 0.0)
+    sliding = AdaptiveCompensator(AdaptiveCompensationConfig(), DT, learn_above_m_s=0.04)  # half the peak: some samples
+    _excite(sliding, FirstOrderActuator(ACTUATOR), 2.0)
+    assert 0 < sliding._count < int(2.0 / DT) and sliding.fits > 0
+    with pytest.raises(ModelError, match=">= 0 m/s"):
+        AdaptiveCompensator(AdaptiveCompensationConfig(), DT, learn_above_m_s=-1.0)
+
+
+def test_the_factory_learns_above_the_creep_of_the_profiles_bearing() -> None:
+    profile = load_profile(None, overrides=["control.compensation=adaptive"])
+    compensator = make_compensator(profile)
+    expected = profile.bearing.yield_displacement_m / profile.control.compensator.adaptive.filter_time_constant_s
+    assert compensator._learn_above == pytest.approx(expected) and expected == pytest.approx(0.00254)
 
 
 def test_an_actuator_outside_the_stated_bounds_pins_the_adaptation_at_them() -> None:
@@ -340,30 +385,61 @@ def test_an_actuator_outside_the_stated_bounds_pins_the_adaptation_at_them() -> 
     history, _ = _excite(compensator, FirstOrderActuator(ACTUATOR), 4.0)
     assert compensator.pinned and history[-1, 2] == 50_000.0
     assert compensator.bound_value > 50_000.0  # the fit that was refused
+    assert compensator.clip_N > 1_000.0  # 44 kN s/m on a velocity of 57 mm/s RMS
     assert np.all(history[:, 2] <= 50_000.0)
+
+
+def test_a_clip_the_load_cell_cannot_see_is_not_a_pin() -> None:
+    """(C7): a bound 1 N s/m below the fitted flow gain clips every fit by about 0.06 N RMS: held, not pinned."""
+    free = AdaptiveCompensator(AdaptiveCompensationConfig(), DT)
+    _excite(free, FirstOrderActuator(ACTUATOR), 4.0)
+    settings = AdaptiveCompensationConfig(flow_bounds_Ns_per_m=(0.0, free.coefficients[2] - 1.0))
+    compensator = AdaptiveCompensator(settings, DT)
+    history, _ = _excite(compensator, FirstOrderActuator(ACTUATOR), 4.0)
+    assert history[-1, 2] == settings.flow_bounds_Ns_per_m[1]  # clipped
+    assert 0.0 < compensator.clip_N < settings.clip_tolerance_N and not compensator.pinned
+    tight = AdaptiveCompensator(AdaptiveCompensationConfig(flow_bounds_Ns_per_m=settings.flow_bounds_Ns_per_m,
+                                                           clip_tolerance_N=0.01), DT)
+    _excite(tight, FirstOrderActuator(ACTUATOR), 4.0)
+    assert tight.pinned  # the same clip against a tolerance below it
 
 
 def test_the_windows_running_sums_are_the_sums_of_the_samples_it_holds() -> None:
     compensator = AdaptiveCompensator(AdaptiveCompensationConfig(window_s=0.2), DT)  # 100 samples: wraps 15 times
     _excite(compensator, FirstOrderActuator(ACTUATOR), 3.0)
     ring = compensator._ring
-    p, y = ring[:, :3], ring[:, 3]
+    p, y = ring[:, :4], ring[:, 4]
     normal, right = p.T @ p, p.T @ y
-    expected = np.array([normal[0, 0], normal[0, 1], normal[0, 2], normal[1, 1], normal[1, 2], normal[2, 2], *right])
-    assert np.allclose(compensator._sums, expected, rtol=1e-9, atol=1e-9 * np.max(np.abs(expected)))
+    assert np.allclose(compensator._normal, normal, rtol=1e-9, atol=1e-9 * np.max(np.abs(normal)))
+    assert np.allclose(compensator._right, right, rtol=1e-9, atol=1e-9 * np.max(np.abs(right)))
 
 
 def test_solve_normalized_agrees_with_a_direct_solve_and_refuses_collinear_regressors() -> None:
     rng = np.random.default_rng(3)
-    p = rng.normal(size=(200, 3)) * (1e3, 1e5, 0.1)
-    y = p @ (1.0, 0.008, 94_000.0) + rng.normal(size=200)
+    p = rng.normal(size=(200, 4)) * (1e3, 1e5, 0.1, 2.0)
+    p[:, 3] += 10.0 * p[:, 2]  # correlated, as velocity and acceleration are, yet well excited
+    y = p @ (1.0, 0.008, 94_000.0, 600.0) + rng.normal(size=200)
     normal, right = p.T @ p, p.T @ y
-    sums = np.array([normal[0, 0], normal[0, 1], normal[0, 2], normal[1, 1], normal[1, 2], normal[2, 2], *right])
-    assert np.allclose(solve_normalized(sums, 1e-3), np.linalg.solve(normal, right), rtol=1e-9)
+    work, solution = [[0.0] * 6 for _ in range(4)], [0.0] * 4  # lists, as the tick has them (rows are swapped)
+    assert solve_normalized(normal, right, 1e-3, work, solution)
+    assert np.allclose(solution, np.linalg.solve(normal, right), rtol=1e-9)
+    scale = np.sqrt(np.diag(normal))
+    determinant = np.linalg.det(normal / np.outer(scale, scale))
+    assert not solve_normalized(normal, right, determinant * 1.001, work, solution)  # the threshold is the determinant
+    assert solve_normalized(normal, right, determinant * 0.999, work, solution)
+    mixed = np.random.default_rng(1)  # a system whose elimination swaps rows (partial pivoting)
+    q = mixed.normal(size=(50, 4)) @ mixed.normal(size=(4, 4))
+    q_right = q.T @ mixed.normal(size=50)
+    rows = [[0.0] * 6 for _ in range(4)]
+    order = [id(row) for row in rows]
+    assert solve_normalized(q.T @ q, q_right, 1e-12, rows, solution)
+    assert [id(row) for row in rows] != order  # the swap happened
+    assert np.allclose(solution, np.linalg.solve(q.T @ q, q_right), rtol=1e-8)
     p[:, 2] = p[:, 0] * 1e-4  # the velocity a copy of the force: nothing tells a0 from a2
     normal, right = p.T @ p, p.T @ y
-    sums = np.array([normal[0, 0], normal[0, 1], normal[0, 2], normal[1, 1], normal[1, 2], normal[2, 2], *right])
-    assert solve_normalized(sums, 1e-3) is None
+    before = list(solution)
+    assert not solve_normalized(normal, right, 1e-3, work, solution)
+    assert solution == before  # untouched when refused
 
 
 def test_the_adaptive_compensators_bounds_are_checked() -> None:
@@ -379,17 +455,22 @@ def test_the_adaptive_compensator_allocates_nothing_per_tick() -> None:
     plant = FirstOrderActuator(ACTUATOR)
     _excite(compensator, plant, 1.5)  # the window is more than half full: every tick fits
     meas = Measurements()
-    tracemalloc.start()
-    try:
-        before = tracemalloc.get_traced_memory()[0]
-        for k in range(2000):
+
+    def ticks(first: int, count: int) -> None:
+        for k in range(first, first + count):
             meas.base_velocity_m_s = 0.05 * math.sin(k * 0.01)
             meas.actuator_force_N = plant.force_N
             plant.step(compensator.update(k * DT, DT, 1_000.0 * math.sin(k * 0.02), meas, compensator.command_N), 0.0, DT)
+
+    tracemalloc.start()
+    try:
+        ticks(0, 100)  # the floats the sums and the scratch hold are now ones traced: a fixed count, not growth
+        before = tracemalloc.get_traced_memory()[0]
+        ticks(100, 2000)
         growth = tracemalloc.get_traced_memory()[0] - before
     finally:
         tracemalloc.stop()
-    assert growth < 1024
+    assert growth < 1024  # 2000 ticks: half a byte each would show
 
 
 def test_a_rig_outside_the_adaptive_bounds_trips_compensation_fault_on_the_twin() -> None:
@@ -406,10 +487,10 @@ def test_a_rig_outside_the_adaptive_bounds_trips_compensation_fault_on_the_twin(
 def test_the_adaptive_compensator_starts_from_the_actuator_model_or_from_none() -> None:
     from_model = make_compensator(load_profile(None, overrides=[*PLAIN_LOOP, "control.compensation=adaptive"]))
     assert isinstance(from_model, AdaptiveCompensator)
-    assert tuple(from_model.coefficients) == pytest.approx((1.0, 1.0 / ACTUATOR.bandwidth_rad_s, 94_000.0), rel=0.01)
+    assert tuple(from_model.coefficients) == pytest.approx((1.0, 1.0 / ACTUATOR.bandwidth_rad_s, 94_000.0, 0.0), rel=0.01)
     from_none = make_compensator(load_profile(None, overrides=["control.compensation=adaptive",
                                                                "control.compensator.adaptive.start=none"]))
-    assert tuple(from_none.coefficients) == (1.0, 0.0, 0.0)
+    assert tuple(from_none.coefficients) == (1.0, 0.0, 0.0, 0.0)
     outside = [*PLAIN_LOOP, "control.compensation=adaptive", "control.compensator.adaptive.flow_bounds_Ns_per_m=[0, 50000]"]
     with pytest.raises(ProfileError, match="outside its bounds"):
         make_compensator(load_profile(None, overrides=outside))
