@@ -25,6 +25,7 @@ The same seed gives the identical array; different seeds give different ones.
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 import numpy as np
@@ -83,12 +84,8 @@ def synthetic_record(
     n = int(round(duration_s / dt_s)) + 1
     t = np.arange(n) * dt_s
     noise = np.random.default_rng(seed).standard_normal(n)
-    from scipy import (
-        signal,  # imported here: about 1 s at start-up, and only the synthetic record needs it
-    )
-
     sos = clough_penzien_sos(dt_s, omega_g_rad_s, zeta_g, omega_f_rad_s, zeta_f)
-    accel = signal.sosfilt(sos, noise) * envelope_shape(t, t[-1], envelope, peak_fraction, end_amplitude)
+    accel = filter_sections(sos, noise) * envelope_shape(t, t[-1], envelope, peak_fraction, end_amplitude)
     accel *= pga_g * G_M_S2 / np.max(np.abs(accel))
     source = (
         f"synthetic Clough-Penzien, seed {seed}, omega_g {omega_g_rad_s:g} rad/s, zeta_g {zeta_g:g}, "
@@ -98,14 +95,57 @@ def synthetic_record(
 
 
 def clough_penzien_sos(dt_s: float, omega_g: float, zeta_g: float, omega_f: float, zeta_f: float) -> np.ndarray:
-    """Second-order sections of the bilinear-discretised Clough-Penzien filter."""
-    zeros = np.array([-omega_g / (2.0 * zeta_g), 0.0, 0.0])
-    poles = np.concatenate([np.roots([1.0, 2 * zeta_g * omega_g, omega_g**2]), np.roots([1.0, 2 * zeta_f * omega_f, omega_f**2])])
-    gain = 2.0 * zeta_g * omega_g
-    from scipy import signal
+    """Second-order sections ``(2, 6)`` of the bilinear-discretised Clough-Penzien filter.
 
-    z_d, p_d, k_d = signal.bilinear_zpk(zeros, poles, gain, fs=1.0 / dt_s)
-    return signal.zpk2sos(z_d, p_d, k_d)
+    The filter (rad/s) ``H(s) = 2 zeta_g omega_g (s + omega_g / (2 zeta_g)) s^2 /
+    ((s^2 + 2 zeta_g omega_g s + omega_g^2)(s^2 + 2 zeta_f omega_f s + omega_f^2))``, mapped by
+    ``z = (1 + s / (2 fs)) / (1 - s / (2 fs))``; its zero at infinity goes to ``z = -1``. Written
+    out here rather than taken from ``scipy.signal`` (``bilinear_zpk``, ``zpk2sos``), whose import
+    costs about a second of every ``harness simulate`` that uses the synthetic record.
+    """
+    two_fs = 2.0 / dt_s
+
+    def bilinear(root: complex) -> complex:
+        return (two_fs + root) / (two_fs - root)
+
+    def quadratic(roots: tuple[complex, complex]) -> tuple[float, float, float]:
+        """``(1, -(r1 + r2), r1 r2)``: the real polynomial with the two roots."""
+        return 1.0, -(roots[0] + roots[1]).real, (roots[0] * roots[1]).real
+
+    def pole_pair(omega: float, zeta: float) -> tuple[complex, complex]:
+        """The roots of ``s^2 + 2 zeta omega s + omega^2``: a conjugate pair, or two real ones when overdamped."""
+        if zeta < 1.0:
+            root = complex(-zeta * omega, omega * math.sqrt(1.0 - zeta * zeta))
+            return root, root.conjugate()
+        spread = omega * math.sqrt(zeta * zeta - 1.0)
+        return complex(-zeta * omega - spread), complex(-zeta * omega + spread)
+
+    s_zero = -omega_g / (2.0 * zeta_g)
+    s_poles = (*pole_pair(omega_g, zeta_g), *pole_pair(omega_f, zeta_f))
+    # the bilinear map's gain (as scipy.signal.bilinear_zpk):
+    # k_d = k prod(2 fs - s_zeros) / prod(2 fs - s_poles), with the zeros at 0 and the one at -omega_g / (2 zeta_g)
+    gain = complex(2.0 * zeta_g * omega_g * (two_fs - s_zero) * two_fs * two_fs)
+    for pole in s_poles:
+        gain /= two_fs - pole
+    first = (*quadratic((complex(bilinear(s_zero)), complex(-1.0))), *quadratic((bilinear(s_poles[0]), bilinear(s_poles[1]))))
+    second = (*quadratic((complex(1.0), complex(1.0))), *quadratic((bilinear(s_poles[2]), bilinear(s_poles[3]))))
+    sections = np.array([first, second], dtype=float)
+    sections[0, :3] *= gain.real
+    return sections
+
+
+def filter_sections(sections: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``x`` through the second-order sections in turn (direct form II transposed, zero initial state)."""
+    y = np.asarray(x, dtype=float).tolist()
+    for b0, b1, b2, a0, a1, a2 in sections.tolist():
+        b0, b1, b2, a1, a2 = b0 / a0, b1 / a0, b2 / a0, a1 / a0, a2 / a0
+        z1 = z2 = 0.0
+        for k, value in enumerate(y):
+            out = b0 * value + z1
+            z1 = b1 * value - a1 * out + z2
+            z2 = b2 * value - a2 * out
+            y[k] = out
+    return np.array(y)
 
 
 def envelope_shape(t_s: np.ndarray, end_s: float, kind: Envelope, peak_fraction: float, end_amplitude: float) -> np.ndarray:

@@ -92,3 +92,23 @@ def test_name_and_source_carry_the_seed():
 def test_bad_parameters_are_refused(kwargs, message):
     with pytest.raises(RecordError, match=message):
         synthetic_record(**kwargs)
+
+
+@pytest.mark.parametrize(("dt", "omega_g", "zeta_g", "omega_f", "zeta_f"), [
+    (0.01, 15.6, 0.6, 1.5, 0.6), (0.005, 12.0, 0.3, 2.0, 0.8), (0.002, 20.0, 1.3, 1.0, 0.6),  # the last overdamped
+])
+def test_the_written_out_filter_is_scipys_bilinear_clough_penzien(dt, omega_g, zeta_g, omega_f, zeta_f):
+    """The sections and their filter, written out to spare the command line scipy.signal's import, against
+    ``scipy.signal``'s ``bilinear_zpk``, ``zpk2sos`` and ``sosfilt`` of the same analogue filter."""
+    from scipy import signal
+
+    from harness.motions.synthetic import clough_penzien_sos, filter_sections
+
+    zeros = np.array([-omega_g / (2 * zeta_g), 0.0, 0.0])
+    poles = np.concatenate([np.roots([1, 2 * zeta_g * omega_g, omega_g**2]), np.roots([1, 2 * zeta_f * omega_f, omega_f**2])])
+    reference = signal.zpk2sos(*signal.bilinear_zpk(zeros, poles, 2 * zeta_g * omega_g, fs=1.0 / dt))
+    noise = np.random.default_rng(4).standard_normal(4000)
+    expected = signal.sosfilt(reference, noise)
+    mine = clough_penzien_sos(dt, omega_g, zeta_g, omega_f, zeta_f)
+    assert np.max(np.abs(filter_sections(mine, noise) - expected)) < 1e-11 * np.max(np.abs(expected))
+    assert np.array_equal(filter_sections(reference, noise), expected)  # the same recursion as sosfilt, to the bit
