@@ -36,6 +36,7 @@ sys.path.insert(0, str(REPO))
 from harness.model.warmup import warm_up  # noqa: E402
 from harness.motions.config import load_motion  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
+from harness.rig.parts import RigParts  # noqa: E402
 from harness.rig.virtual_rig import VirtualRig  # noqa: E402
 
 MODELS = {
@@ -52,7 +53,8 @@ def rig_cpu(overrides: tuple[str, ...], motion, rate_hz: float, forces: np.ndarr
     can_config = profile.can_settings(rate_hz=rate_hz)
     bus = can.Bus(interface="virtual", channel=f"bench-rig-{time.monotonic_ns()}", receive_own_messages=False)
     try:
-        rig = VirtualRig(profile, motion, bus, step_period_s=1.0 / rate_hz, lockstep=True, can_config=can_config)
+        rig = VirtualRig(RigParts.from_profile(profile), motion, bus, step_period_s=1.0 / rate_hz, lockstep=True,
+                         can_config=can_config)
         rig.table.start()
         cpu = np.empty(len(forces))
         now = 0.0

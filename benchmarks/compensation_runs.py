@@ -40,13 +40,14 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from harness.profile import load_profile  # noqa: E402
+from harness.recording.peaks import run_peaks  # noqa: E402
 from harness.recording.reader import load_run  # noqa: E402
 from harness.report.force_tracking_table import record_span, run_tracking  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
 from harness.runs.options import StudyOptions  # noqa: E402
 from harness.runs.simulate import run_study  # noqa: E402
 from harness.signals.columns import FORCE_RAW  # noqa: E402
-from harness.signals.peaks import reduction_pct, run_peaks  # noqa: E402
+from harness.signals.peaks import reduction_pct  # noqa: E402
 
 sys.path.insert(0, str(REPO / "benchmarks"))
 from rig_table import RIG_RECORDS  # noqa: E402

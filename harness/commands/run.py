@@ -113,9 +113,10 @@ def run(args: argparse.Namespace, console: Console) -> int:
 def print_run_peaks(console: Console, profile: Profile, motion: GroundMotion, session: SessionResult) -> None:
     """The run's peak responses, as the dry run prints them, without a reference: what the run measured."""
     from harness.recording import load_run
+    from harness.recording.peaks import run_peaks
     from harness.report.tables import reduction_table
     from harness.runs.dry_run import record_span_s
-    from harness.signals.peaks import ComparisonWindow, run_peaks
+    from harness.signals.peaks import ComparisonWindow
 
     if session.record_problem:
         console.print(f"[bold red]the recorder failed[/]: {escape(session.record_problem)}; the peaks below come "

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from harness.profile import Profile
+    from harness.control.sections import ControlSections
 
 #: Delay around the estimator's loop in lockstep (s): sensor 1 ms, half the 2 ms hold, command transport 1 ms ...
 LOCKSTEP_DELAY_S = 0.003
@@ -44,14 +44,14 @@ MAX_CROSSING_GAIN = 0.5
 CROSSING_BAND_HZ, CROSSING_POINTS = (5.0, 150.0), 14_501
 
 
-def estimator_yield_displacement_m(profile: Profile) -> float:
+def estimator_yield_displacement_m(profile: ControlSections) -> float:
     """The estimator's pre-sliding (yield) displacement (m): ``control.estimator.yield_displacement_m``, else ``D_y``."""
     own = profile.control.estimator.yield_displacement_m
     return profile.bearing.yield_displacement_m if own is None else own
 
 
 def estimator_loop(
-    profile: Profile,
+    profile: ControlSections,
     freq_hz: np.ndarray,
     delay_s: float,
     feedforward_gain: float | None = None,
@@ -61,7 +61,7 @@ def estimator_loop(
 
     Parameters
     ----------
-    profile : Profile
+    profile : ControlSections
     freq_hz : numpy.ndarray
         Frequencies (Hz).
     delay_s : float
@@ -91,7 +91,7 @@ def estimator_loop(
 
 
 def phase_crossings(
-    profile: Profile, delay_s: float, feedforward_gain: float | None = None, estimator_yield_m: float | None = None
+    profile: ControlSections, delay_s: float, feedforward_gain: float | None = None, estimator_yield_m: float | None = None
 ) -> list[tuple[float, float]]:
     """``(f Hz, |L|)`` where the loop's phase crosses 0 in :data:`CROSSING_BAND_HZ`."""
     freq = np.linspace(*CROSSING_BAND_HZ, CROSSING_POINTS)
@@ -102,13 +102,14 @@ def phase_crossings(
 
 
 def crossing_gain(
-    profile: Profile, delay_s: float, feedforward_gain: float | None = None, estimator_yield_m: float | None = None
+    profile: ControlSections, delay_s: float, feedforward_gain: float | None = None, estimator_yield_m: float | None = None
 ) -> float:
     """The largest ``|L|`` at a phase-0 crossing (0 if the phase does not cross 0 in the band)."""
     return max((gain for _, gain in phase_crossings(profile, delay_s, feedforward_gain, estimator_yield_m)), default=0.0)
 
 
-def margin_yield_displacement_m(profile: Profile, delay_s: float = REALTIME_DELAY_S, feedforward_gain: float = 0.0) -> float:
+def margin_yield_displacement_m(profile: ControlSections, delay_s: float = REALTIME_DELAY_S,
+                                feedforward_gain: float = 0.0) -> float:
     """The least estimator yield displacement (m) with ``|L| <= MAX_CROSSING_GAIN`` at the crossing.
 
     ``L`` is proportional to ``1 / D_y_est`` at every frequency (the crossings do not move),

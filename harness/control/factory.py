@@ -1,5 +1,8 @@
 """Controllers built from a profile's named designs: for simulation, and for a rig.
 
+Each builder reads the sections it needs (:class:`~harness.control.sections.ControlSections`:
+a :class:`~harness.profile.Profile` is one), so the control package does not import the profile.
+
 One place builds a controller and its friction estimator, so ``harness simulate``, the simulated twin, a dry run
 and a run on the real rig all get the same design from the same profile.
 """
@@ -16,11 +19,11 @@ from harness.control.designs import OutputActuatorDesign, StateFeedbackActuatorD
 from harness.control.estimator import FrictionEstimator
 from harness.control.estimator_margin import estimator_yield_displacement_m
 from harness.control.model_compensation import ModelCompensator
+from harness.control.sections import ControlSections
 from harness.errors import ModelError, ProfileError
-from harness.profile import Profile
 
 
-def make_friction_estimator(profile: Profile) -> FrictionEstimator:
+def make_friction_estimator(profile: ControlSections) -> FrictionEstimator:
     """The friction estimator of ``profile``'s controller (SPEC 3, Eq. 3-5).
 
     The design bearing (``bearing``, never ``rig.truth``) with the estimator's own yield
@@ -31,7 +34,7 @@ def make_friction_estimator(profile: Profile) -> FrictionEstimator:
     return FrictionEstimator(bearing, profile.structure.total_weight_N)
 
 
-def require_design(profile: Profile, name: str) -> None:
+def require_design(profile: ControlSections, name: str) -> None:
     """Refuse a controller name that is not a design of ``profile``.
 
     Raises
@@ -48,17 +51,17 @@ def require_design(profile: Profile, name: str) -> None:
         )
 
 
-def designed_with_actuator(profile: Profile, name: str) -> bool:
+def designed_with_actuator(profile: ControlSections, name: str) -> bool:
     """The design ``name`` is actuator-aware: it needs a plant with the actuator and its load cell."""
     return isinstance(profile.control.designs.get(name), (StateFeedbackActuatorDesign, OutputActuatorDesign))
 
 
-def make_controller(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
+def make_controller(profile: ControlSections, name: str, design_stiffness_scale: float = 1.0) -> Controller:
     """Build the named design of ``profile`` on its (possibly mis-scaled) design model.
 
     Parameters
     ----------
-    profile : Profile
+    profile : ControlSections
     name : str
         A key of ``control.designs``.
     design_stiffness_scale : float
@@ -85,7 +88,7 @@ def make_controller(profile: Profile, name: str, design_stiffness_scale: float =
     return build_controller(name, design, design_building, actuator)
 
 
-def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale: float = 1.0) -> Controller:
+def build_controller_for_rig(profile: ControlSections, name: str, design_stiffness_scale: float = 1.0) -> Controller:
     """The named design (designed on story stiffnesses scaled by ``design_stiffness_scale``),
     refused if it needs states a rig does not measure.
 
@@ -104,7 +107,7 @@ def build_controller_for_rig(profile: Profile, name: str, design_stiffness_scale
     return controller
 
 
-def make_compensator(profile: Profile, method: str | None = None, controller: str | None = None) -> Compensator:
+def make_compensator(profile: ControlSections, method: str | None = None, controller: str | None = None) -> Compensator:
     """The force-tracking compensator ``method`` (default ``control.compensation``) of ``profile``.
 
     The adaptive compensator fits its coefficients online within ``control.compensator.adaptive``'s
@@ -114,7 +117,7 @@ def make_compensator(profile: Profile, method: str | None = None, controller: st
 
     Parameters
     ----------
-    profile : Profile
+    profile : ControlSections
     method : str, optional
         ``none``, ``model`` or ``adaptive``; default ``control.compensation``.
     controller : str, optional
@@ -167,7 +170,7 @@ def make_compensator(profile: Profile, method: str | None = None, controller: st
         raise ProfileError(str(err), profile.source_path, "control.compensator.model") from err
 
 
-def _actuator_model(profile: Profile) -> ActuatorModel:
+def _actuator_model(profile: ControlSections) -> ActuatorModel:
     """``k_h`` and ``w_f`` of ``rig.actuator``; ProfileError for a model (A1) does not describe."""
     try:
         return ActuatorModel.from_rig_actuator(profile.rig.actuator)

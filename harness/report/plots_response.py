@@ -16,6 +16,7 @@ import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
 
+from harness.recording.peaks import run_peaks
 from harness.recording.reader import RunData
 from harness.report.figure import PlotFile, colours, figure, save, style
 from harness.report.plot_common import PlotOptions, legend, peak_of, record_time, small_runs
@@ -23,7 +24,6 @@ from harness.report.plots_control import head_panels, record_panels, title_panel
 from harness.report.record_groups import RecordGroup
 from harness.report.reference import passive_reference, passive_reference_drifts
 from harness.signals.columns import drift
-from harness.signals.peaks import run_peaks
 
 
 def drift_height_px(n_stories: int, n_records: int = 1) -> int:

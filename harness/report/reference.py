@@ -21,12 +21,13 @@ from typing import Any
 import numpy as np
 
 from harness.motions.tracking import Tracking, tracking
+from harness.recording.peaks import run_peaks
 from harness.recording.reader import RunData
 from harness.report.peak_table import PeakTable
 from harness.report.table_check import run_table_check
 from harness.report.tables import peaks_comparison_table, peaks_pair_table, window_note
 from harness.report.text_table import TextTable
-from harness.signals.peaks import Peaks, run_peaks
+from harness.signals.peaks import Peaks
 
 REFERENCE_KEY = "reference"
 TARGET_FILE_KEY = "target_motion_file"

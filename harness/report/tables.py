@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 
+from harness.recording.peaks import run_peaks
 from harness.recording.reader import RunData
 from harness.report.peak_table import PERCENT_DIGITS, PeakRow, PeakTable
 from harness.report.quantities import (
@@ -32,7 +33,7 @@ from harness.report.quantities import (
     response_quantities,
 )
 from harness.report.table_check import run_table_check
-from harness.signals.peaks import Peaks, force_column, run_peaks, run_window
+from harness.signals.peaks import Peaks, force_column, run_window
 
 
 def _row(quantity: Quantity, values: Sequence[float | None]) -> PeakRow:

@@ -60,7 +60,6 @@ from harness.safety.lifecycle import State
 if TYPE_CHECKING:
     from drivers.link import RigLink
     from harness.motions import GroundMotion
-    from harness.profile import Profile
 
 #: HEARTBEAT state of a harness whose run has ended normally: the table it started is held
 #: (``_stop_table_after_the_run``). Not TRIPPED: after a trip the profile's trip actions decide whether
@@ -73,7 +72,8 @@ class VirtualRig:
 
     Parameters
     ----------
-    parts : RigParts or Profile
+    parts : RigParts
+        The rig's true building, bearing and settings (:meth:`RigParts.from_profile` of a profile).
     motion : GroundMotion
         The processed record the table plays.
     bus_or_link : can.BusABC or RigLink
@@ -95,7 +95,7 @@ class VirtualRig:
 
     def __init__(
         self,
-        parts: RigParts | Profile,
+        parts: RigParts,
         motion: GroundMotion,
         bus_or_link: can.BusABC | RigLink,
         *,
@@ -105,7 +105,6 @@ class VirtualRig:
         clock: Callable[[], float] = time.monotonic,
         can_config: CanConfig | None = None,
     ):
-        parts = parts if isinstance(parts, RigParts) else RigParts.from_profile(parts)
         if parts.building.n_stories != 3:
             raise ModelError(f"the rig protocol carries 3 stories; the building has {parts.building.n_stories}")
         self.config = cfg = parts.rig

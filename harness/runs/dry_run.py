@@ -43,6 +43,7 @@ from harness.motions.summary import motion_facts
 from harness.paths import LOG_DIR
 from harness.profile import Profile
 from harness.recording import load_run
+from harness.recording.peaks import run_peaks
 from harness.recording.runfolder import check_log_dir
 from harness.recording.space import check_log_space
 from harness.rig.truth import truth_metadata, truth_summary
@@ -50,7 +51,7 @@ from harness.runs.loop_rate import check_loop_rate
 from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 from harness.runs.run_context import write_dry_run_context
 from harness.runs.session import SessionResult, SessionSettings, expected_run_size, run_session
-from harness.signals.peaks import Peaks, run_peaks
+from harness.signals.peaks import Peaks
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 from harness.simulation.twin import run_rig_twin
 
@@ -391,6 +392,7 @@ def serving_virtual_rig(
         sub-steps of the rig (:func:`~harness.runs.loop_rate.check_loop_rate`), before the rig starts.
     """
     from harness.canbus.link import open_rig
+    from harness.rig.parts import RigParts
     from harness.rig.virtual_rig import VirtualRig
 
     check_loop_rate(profile, rate_given=False, virtual_rig=not external_rig)
@@ -404,7 +406,8 @@ def serving_virtual_rig(
             # of every 5 ms, or the loop waits up to 5 ms for it behind the rig thread.
             sys.setswitchinterval(IN_PROCESS_SWITCH_INTERVAL_S)
             rig_link = open_rig(can)
-            rig = VirtualRig(profile, motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=lockstep, can_config=can)
+            rig = VirtualRig(RigParts.from_profile(profile), motion, rig_link, step_period_s=1.0 / rate_hz, lockstep=lockstep,
+                             can_config=can)
             rig.start_thread()
         elif not external_rig:
             process = _rig_process(profile, can, lockstep)

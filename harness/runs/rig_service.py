@@ -25,6 +25,7 @@ from harness.canbus.link import open_rig
 from harness.errors import EXPECTED_ERRORS, BusError
 from harness.model.warmup import warm_up
 from harness.profile import Profile, load_profile
+from harness.rig.parts import RigParts
 from harness.rig.virtual_rig import VirtualRig
 from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 
@@ -127,7 +128,8 @@ def serve_rig(
     stop = stop_event or threading.Event()
     with open_rig(can_config, peer_pids) as link:
         rig = VirtualRig(
-            profile, motion, link, step_period_s=period, lockstep=lockstep or None, seed=seed, clock=clock,
+            RigParts.from_profile(profile), motion, link, step_period_s=period, lockstep=lockstep or None, seed=seed,
+            clock=clock,
             can_config=can_config,
         )
         status = exit_codes.OK

@@ -1,8 +1,8 @@
 """Peak responses people compare (SPEC 5): one model, computed one way, from a case's columns.
 
 :func:`peak_responses` turns the columns of one case (a simulated case, the rig twin, a
-run folder read back) into a :class:`Peaks`; :func:`run_peaks` does the same for a run
-folder, taking the weight and whether the run is passive from its metadata. ``harness
+run folder read back) into a :class:`Peaks`; :func:`harness.recording.peaks.run_peaks` does the
+same for a run folder, taking the weight and whether the run is passive from its metadata. ``harness
 simulate``, dry runs, reports and benchmarks all read their peaks from here, and compare
 two cases with :func:`reduction_pct`. Rendering (console, HTML, CSV) is
 :mod:`harness.report.peak_table`'s business.
@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -40,9 +39,6 @@ from harness.signals.columns import (
     drift,
     floor_acceleration,
 )
-
-if TYPE_CHECKING:
-    from harness.recording.reader import RunData
 
 #: The control force u of SPEC 5, best source first: the supervised command sent to the
 #: actuator, else the controller's raw output. A column without a finite value is skipped.
@@ -249,18 +245,6 @@ def peak_responses(
         table_velocity_m_s=_column_peak(columns, TABLE_VELOCITY),
         table_displacement_m=_column_peak(columns, TABLE_DISPLACEMENT),
     )
-
-
-def run_peaks(run: RunData) -> Peaks:
-    """Peaks of a run folder read back (:func:`harness.recording.load_run`), over its comparison window.
-
-    The window is :func:`run_window` (the record and :data:`COMPARISON_TAIL_S`; every row of a
-    run without a record). The weight is the metadata's ``total_weight_N``; a run is passive
-    when its case or controller is ``"passive"``.
-    """
-    weight = run.metadata.get("total_weight_N")
-    return peak_responses(run.signals, weight if isinstance(weight, (int, float)) else None, passive=run.is_passive,
-                          window=run_window(run.metadata))
 
 
 #: A reference (passive) peak at or below this, in its SI unit (m, m/s^2, % of the weight), is

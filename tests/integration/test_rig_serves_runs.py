@@ -344,7 +344,10 @@ def test_one_rig_serves_five_runs_one_tripping_with_resets_in_between(tmp_path, 
         stop.set()
         thread.join(20.0)
     assert status.get("exit") == 0
-    assert journal.count("harness RUNNING: run started") == 5, journal
+    assert journal.count("harness ARMED") == 5, journal  # the five runs that armed (not the refused one)
+    # the tripping run (a 1 N tolerance) trips 0.1 s after its force check starts: on a loaded machine that
+    # can still be in ARMED, before the table's start is confirmed, so it may never show RUNNING
+    assert journal.count("harness RUNNING: run started") in (4, 5), journal
     assert journal.count("harness TRIPPED: run ended: tripped") == 1
     assert "drive reset of ESTOP cleared (fault now NONE)" in journal, "the tripped run's E-stop latch, reset"
     assert journal.count("drive reset of HEARTBEAT_WATCHDOG cleared (fault now NONE)") == 3

@@ -17,10 +17,10 @@ from harness.cli import build_parser, main
 from harness.commands.rig import banner
 from harness.profile import load_profile
 from harness.recording import load_run
+from harness.recording.peaks import run_peaks
 from harness.report.quantities import CONSOLE_WORDING, response_quantities
 from harness.runs.dry_run import DryRunOptions, dry_run
 from harness.runs.options import StudyOptions
-from harness.signals.peaks import run_peaks
 
 RUN = ["run", "--record", "synthetic", "--duration", "1", "--interface", "seqpacket", "--channel", "nowhere"]
 

@@ -10,10 +10,11 @@ import pytest
 
 from harness.cli import main
 from harness.recording import strict_json
+from harness.recording.peaks import run_peaks
 from harness.recording.reader import load_runs
 from harness.report.batch_summary import BatchCase, peaks_per_record, reduction_summary
 from harness.runs.simulate_batch import split_list
-from harness.signals.peaks import Peaks, reduction_pct, run_peaks
+from harness.signals.peaks import Peaks, reduction_pct
 
 RECORDS = ("synthetic:1", "synthetic:2")
 CONTROLLERS = ("FSF-I", "OF-I")

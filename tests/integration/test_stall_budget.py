@@ -22,6 +22,7 @@ from harness.control.factory import build_controller_for_rig, make_friction_esti
 from harness.loop.runner import ControlLoop
 from harness.loop.tick import ControlTick
 from harness.profile import load_profile
+from harness.rig.parts import RigParts
 from harness.rig.virtual_rig import VirtualRig
 from harness.runs.options import StudyOptions, prepare_motion
 from harness.safety.supervisor import Supervisor
@@ -82,7 +83,8 @@ def _run(stall_s: float, step_N: float = 0.0):
 
     clock = FakeClock(service)
     try:
-        rig = VirtualRig(profile, motion, rig_link, step_period_s=PERIOD_S, lockstep=False, clock=clock, can_config=can)
+        rig = VirtualRig(RigParts.from_profile(profile), motion, rig_link, step_period_s=PERIOD_S, lockstep=False, clock=clock,
+                         can_config=can)
         supervisor = Supervisor(profile.safety, period_s=PERIOD_S)
         settle = profile.loop.settle_s
         controller = StallingController(build_controller_for_rig(profile, "phi"), clock, settle + STALL_AT_RUN_S, stall_s, step_N)

@@ -222,6 +222,35 @@ def test_no_ring_either_through_imports_made_for_a_type() -> None:
     assert not cycles, f"modules that import each other, counting imports for types: {cycles}"
 
 
+def package_of(module: str) -> str:
+    """The package a module belongs to, one level below the top (``harness.control``); a loose module is its own."""
+    parts = module.split(".")
+    return ".".join(parts[:2]) if len(parts) > 2 else module
+
+
+def package_imports(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """The module graph folded onto packages: ``a -> b`` when a module of ``a`` imports one of ``b``."""
+    folded: dict[str, set[str]] = {package_of(module): set() for module in graph}
+    for module, deps in graph.items():
+        folded[package_of(module)] |= {package_of(dep) for dep in deps} - {package_of(module)}
+    return folded
+
+
+def test_no_package_ring_either_counting_imports_made_for_a_type() -> None:
+    """Issue 35, item 4: ``harness.profile`` puts the sections together and the packages never import it back
+    (the control's factory reads a :class:`~harness.control.sections.ControlSections`, the virtual rig its
+    :class:`~harness.rig.parts.RigParts`), and ``harness.signals`` does not reach into ``harness.recording``."""
+    cycles = import_cycles(package_imports(project_imports(type_checking=True)))
+    assert not cycles, f"packages that import each other (directly or round a ring): {cycles}"
+
+
+def test_the_package_ring_finder_folds_modules_onto_their_packages() -> None:
+    graph = {"harness.a.x": {"harness.b.y"}, "harness.b.y": {"harness.profile"}, "harness.profile": {"harness.a.z"},
+             "harness.a.z": set()}
+    assert package_imports(graph)["harness.a"] == {"harness.b"}
+    assert import_cycles(package_imports(graph)) == [["harness.a", "harness.b", "harness.profile"]]
+
+
 #: Layers with a rule of their own: a module may import these only from the layers named.
 #: The live console (``harness.console``) is a view of the loop's status, drawn for a run: it
 #: sits with the runs; so does the replay of a run (``harness.replay``), a run of the loop on its log.

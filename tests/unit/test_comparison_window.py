@@ -12,11 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from harness.recording.peaks import run_peaks
 from harness.recording.reader import RunData
 from harness.report.reference import reference_tables
 from harness.report.tables import comparison_table, runs_table
 from harness.signals.columns import BASE_ACCELERATION, SLIDING_DISPLACEMENT, TIME
-from harness.signals.peaks import COMPARISON_TAIL_S, ComparisonWindow, peak_responses, run_peaks
+from harness.signals.peaks import COMPARISON_TAIL_S, ComparisonWindow, peak_responses
 
 RECORD_S = 30.0
 START_S = 0.5  # loop time the record started (the settle before it)

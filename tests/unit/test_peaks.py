@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from harness.recording import load_run, write_simulation_case
+from harness.recording.peaks import run_peaks
 from harness.signals.peaks import (
     Peaks,
     force_column,
     peak_abs,
     peak_responses,
     reduction_pct,
-    run_peaks,
 )
 
 WEIGHT_N = 1000.0

@@ -14,11 +14,12 @@ from harness.recording import (
     load_runs,
     write_simulation_case,
 )
+from harness.recording.peaks import run_peaks
 from harness.report import comparison_table, pair_table, reduction_table, runs_table
 from harness.report.batch_summary import BatchCase, reduction_summary
 from harness.report.peak_table import NO_REDUCTION, without_reductions
 from harness.report.tables import peaks_pair_table
-from harness.signals.peaks import Peaks, run_peaks
+from harness.signals.peaks import Peaks
 
 WEIGHT_N = 4 * 9.80665 * 1000.0
 N_STORIES = 3

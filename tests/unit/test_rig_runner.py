@@ -10,6 +10,7 @@ import pytest
 
 from harness.canbus.config import CanConfig
 from harness.profile import load_profile
+from harness.rig.parts import RigParts
 from harness.rig.runner import serve
 from harness.rig.virtual_rig import VirtualRig
 from harness.runs.options import StudyOptions, prepare_motion
@@ -42,7 +43,7 @@ def test_real_time_loop_advances_with_the_clock_and_publishes_at_the_rates():
     stop = threading.Event()
     clock = FakeClock(stop, 0.2)
     with can.Bus(interface="virtual", channel=channel) as rig_bus, can.Bus(interface="virtual", channel=channel) as listener:
-        rig = VirtualRig(profile, motion, rig_bus, step_period_s=0.002, lockstep=False, clock=clock,
+        rig = VirtualRig(RigParts.from_profile(profile), motion, rig_bus, step_period_s=0.002, lockstep=False, clock=clock,
                          can_config=CanConfig(channel=channel))
         serve(rig, stop, sleep=clock.sleep)
         frames = []
