@@ -1,5 +1,8 @@
 """One tick of the control loop: read -> estimate -> control -> compensate -> supervise -> write -> record.
 
+The estimate -> control -> compensate -> supervise part is :func:`harness.loop.step.control_step`, the one
+step the rig twin and the ideal simulator also run.
+
 Everything the tick touches is allocated before the run: the measurement record, the
 health record, the row, the drivers' frames and samples. Controllers, the estimator
 and the supervisor get the loop's ``t`` and ``dt``; nothing here reads a clock except
@@ -16,11 +19,12 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from harness.control.compensation import Compensator, NoCompensation, compensate
+from harness.control.compensation import Compensator, NoCompensation
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.errors import EXPECTED_ERRORS
-from harness.loop.timing import CONTROL, READ, RECORD, SUPERVISE, WRITE, GapTrace
+from harness.loop.step import StepValues, control_step
+from harness.loop.timing import READ, RECORD, SUPERVISE, WRITE, GapTrace
 from harness.loop.trip_outputs import TripOutputs
 from harness.realtime.memory import float_view
 from harness.safety.checks import bit
@@ -143,6 +147,8 @@ class ControlTick:
         #: When each part of the latest tick ended (the loop gives it its own clock): where a long gap went.
         self.trace = GapTrace()
         self.command: SupervisedCommand = supervisor.command
+        #: The friction and controller force of the latest tick's :func:`~harness.loop.step.control_step`, overwritten.
+        self.step = StepValues()
         reader = self.reader
         self._table, self._base, self._status = reader.table, reader.base, reader.status
         self._drifts, self._accels = reader.sample("STORY_DRIFTS"), reader.sample("FLOOR_ACCELS")
@@ -211,14 +217,14 @@ class ControlTick:
         friction = raw = math.nan
         try:
             self.read(now, stall_s, missed_periods, poll)
-            trace.mark(READ)
-            friction = self.estimator.update(t, dt, self.meas.sliding_velocity_m_s)
-            raw = self.controller.update(t, dt, self.meas, friction, None)
-            force = compensate(self.compensator, t, dt, raw, self.meas, self.command, self.health)
-            trace.mark(CONTROL)
-            command = supervisor.update(t, dt, self.health, force, raw)  # the setpoint is the controller's force
         except Exception as exc:  # noqa: BLE001 - any failure in the tick trips; it never kills the process
             command = supervisor.report_exception(t, exc)
+        else:
+            trace.mark(READ)
+            step = self.step  # estimate -> control (marks CONTROL) -> compensate -> supervise; an exception trips
+            command = control_step(t, dt, self.health, self.estimator, self.controller, self.compensator, supervisor, step,
+                                   trace=trace)
+            friction, raw = step.friction_N, step.raw_N
         trace.mark(SUPERVISE)
         self.write(t, command, now)
         trace.mark(WRITE)

@@ -3,7 +3,9 @@
 Sampling follows SPEC 3 exactly: the controller samples its measurements at
 ``t_k = k / f_s``, and the force it computes is held over ``[t_k, t_k + 1/f_s)``
 (zero-order hold), optionally after a further transport delay. The controller,
-estimator and plant classes are the ones the real-time loop and the virtual rig use.
+estimator and plant classes are the ones the real-time loop and the virtual rig use, and each sample
+runs the loop's own step (:func:`harness.loop.step.control_step`), with no compensation and a
+pass-through in place of the supervisor.
 The per-sample bookkeeping is :class:`harness.simulation.sampled.CaseSamples`, shared with the
 rig twin; :class:`CaseResult` is re-exported from there.
 """
@@ -18,10 +20,13 @@ from typing import Literal
 
 import numpy as np
 
-from drivers.measurements import Measurements
+from harness.control.compensation import NoCompensation
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
+from harness.loop.step import StepEstimator, StepValues, control_step
 from harness.model.plant import Plant
+from harness.safety.health import TickHealth
+from harness.safety.supervisor import SupervisedCommand
 from harness.signals import columns as layout
 from harness.simulation.sampled import CaseResult, CaseSamples, case_result
 
@@ -102,35 +107,84 @@ class _HeldForce:
         self.plant.advance(t, t1, self.acting_N)
 
 
+class _PassThrough:
+    """The ideal simulator's supervisor: none. The command is the compensated force, always enabled; an
+    exception in the step propagates (the ideal case has no safety layer to trip).
+
+    A :class:`harness.loop.step.StepSupervisor`, so the ideal case runs the loop's own step.
+    """
+
+    __slots__ = ("command",)
+
+    def __init__(self) -> None:
+        self.command = SupervisedCommand()
+        self.command.enable = True
+
+    def update(
+        self, t: float, dt: float, health: TickHealth, raw_force_N: float, setpoint_N: float | None = None,
+    ) -> SupervisedCommand:
+        """``raw_force_N`` (N) as it is, in the one preallocated command."""
+        command = self.command
+        command.t = t
+        command.force_N = raw_force_N
+        return command
+
+    def report_exception(self, t: float, exc: BaseException) -> SupervisedCommand:
+        """Re-raise ``exc``: nothing trips in the ideal case."""
+        raise exc
+
+
+class _PlantFriction:
+    """``friction_source: model``: the plant's own friction force as the step's friction term (simulation only).
+
+    The caller sets :attr:`table_velocity_m_s` to the record's table velocity at the sample before each step.
+    """
+
+    __slots__ = ("plant", "table_velocity_m_s")
+
+    def __init__(self, plant: Plant) -> None:
+        self.plant = plant
+        self.table_velocity_m_s = 0.0
+
+    def update(self, t: float, dt: float, sliding_velocity_m_s: float) -> float:
+        """The plant's friction force at ``t`` (s), N (the measured sliding velocity is not used)."""
+        return self.plant.friction_force(t, self.table_velocity_m_s)
+
+
 def _control_step(
     plant: Plant, times: np.ndarray, settings: SamplingSettings, controller: Controller, estimator: FrictionEstimator | None,
     values: dict[str, np.ndarray],
 ) -> Callable[[int, float], float]:
-    """The controller's work at sample ``k`` (time ``t``, s): measure, estimate friction, compute the force.
+    """The controller's work at sample ``k`` (time ``t``, s): measure, then the loop's step
+    (:func:`harness.loop.step.control_step`: estimate, control, no compensation, no supervisor).
 
     The returned ``control(k, t) -> force_N`` records the controller's internals into ``values``
     (the :data:`harness.signals.columns.SIMULATED_CONTROL` columns).
     """
     period = 1.0 / settings.rate_hz
     table_x, table_v = plant.table.states(times)
-    meas = Measurements()
+    health = TickHealth()
+    meas = health.meas
     n_z = plant.y.size - 1
-    use_estimator = settings.friction_source == "estimator"
+    model_friction = _PlantFriction(plant)
+    if settings.friction_source == "estimator":
+        assert estimator is not None, "friction_source 'estimator' needs an estimator"
+        friction_source: StepEstimator = estimator
+    else:
+        friction_source = model_friction
+    compensator, supervisor, step = NoCompensation(), _PassThrough(), StepValues()
     sliding_variable, equivalent_force = values[layout.SLIDING_VARIABLE], values[layout.EQUIVALENT_FORCE]
     friction_estimate, raw_force = values[layout.FRICTION_ESTIMATE], values[layout.FORCE_RAW]
 
     def control(k: int, t: float) -> float:
         plant.measure(t, meas, table_x[k], table_v[k])
-        if use_estimator:
-            assert estimator is not None, "friction_source 'estimator' needs an estimator"
-            friction = estimator.update(t, period, meas.sliding_velocity_m_s)
-        else:
-            friction = plant.friction_force(t, table_v[k])
-        force = controller.update(t, period, meas, friction, plant.y[:n_z])
+        model_friction.table_velocity_m_s = table_v[k]
+        force = control_step(t, period, health, friction_source, controller, compensator, supervisor, step,
+                             plant.y[:n_z]).force_N
         sliding_variable[k] = controller.sliding_variable
         equivalent_force[k] = controller.equivalent_force_N
-        friction_estimate[k] = friction
-        raw_force[k] = force
+        friction_estimate[k] = step.friction_N
+        raw_force[k] = step.raw_N
         return force
 
     return control

@@ -6,8 +6,11 @@ clock: the table and plant (:class:`~harness.rig.table.TablePlant`), the sensors
 servo actuator (transport delay, dynamics, force and rate limits:
 :class:`~harness.rig.actuator.ServoActuator`) on the rig's physics sub-step, and the
 safety supervisor between the controller and the actuator (force clamp, rate limit,
-stroke fade; trips end the case). This is what a dry run should reproduce within its
-statistics, and what a lab engineer checks an experiment design against.
+stroke fade; trips end the case). Each sample runs the loop's tick's step,
+:func:`harness.loop.step.control_step`: an exception in the estimator, the controller, the
+compensator or the supervisor trips the case (``tick_exception``) as it trips a dry run. This
+is what a dry run should reproduce within its statistics, and what a lab engineer checks an
+experiment design against.
 
 A controller reads what the rig measures: the table and base-mat sensors, and the actuator's
 force (``Measurements.actuator_force_N``, the load cell). With ``offline_true_state`` a
@@ -22,12 +25,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from harness.control.compensation import Compensator, compensate
+from harness.control.compensation import Compensator
 from harness.control.controllers import Controller
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import make_compensator, make_friction_estimator
 from harness.errors import ModelError
 from harness.loop.ending import run_ending
+from harness.loop.step import StepValues, control_step
 from harness.profile import Profile
 from harness.rig.actuator import make_actuator
 from harness.rig.faults import SEIZE, FaultSet, schedule_from
@@ -210,7 +214,8 @@ def _twin_sample(
     health: TickHealth, values: dict[str, np.ndarray], period: float, story_every: int, true_state: int = 0,
     after_trip_samples: int = 0,
 ) -> Callable[[int], bool]:
-    """One controller sample of the twin: read the sensors, estimate, control, compensate, supervise, record, advance.
+    """One controller sample of the twin: read the sensors, the tick's step (estimate, control, compensate, supervise:
+    :func:`harness.loop.step.control_step`), record, advance.
 
     The returned ``sample(k)`` is False when the supervisor tripped ``after_trip_samples`` samples
     ago (the case ends there; the rig advances under the tripped command until then).
@@ -228,6 +233,7 @@ def _twin_sample(
     raw_force, command_force = values[layout.FORCE_RAW], values[layout.FORCE_COMMAND]
     actuator_force = values[layout.FORCE_MEASURED]
     tripped_at = [-1]  # the sample of the trip
+    step = StepValues()
 
     def sample(k: int) -> bool:
         t = k * period
@@ -237,12 +243,11 @@ def _twin_sample(
             column[k] = reading[i]
         meas.set(table_read[0], table_read[1], base_read[0], base_read[1])
         meas.actuator_force_N = health.measured_force_N = actuator.force_N
-        friction = estimator.update(t, period, meas.sliding_velocity_m_s)
-        raw = controller.update(t, period, meas, friction, rig.table.y[:true_state] if true_state else None)
-        force = compensate(compensator, t, period, raw, meas, supervisor.command, health)  # as the loop's tick does
-        command = supervisor.update(t, period, health, force, raw)
-        raw_force[k], command_force[k] = raw, command.force_N
-        sliding_variable[k], friction_estimate[k] = controller.sliding_variable, friction
+        # the loop's tick's step: an exception trips the case as it trips a dry run (tick_exception)
+        command = control_step(t, period, health, estimator, controller, compensator, supervisor, step,
+                               rig.table.y[:true_state] if true_state else None)
+        raw_force[k], command_force[k] = step.raw_N, command.force_N
+        sliding_variable[k], friction_estimate[k] = controller.sliding_variable, step.friction_N
         if supervisor.state is State.TRIPPED:
             if tripped_at[0] < 0:
                 tripped_at[0] = k
