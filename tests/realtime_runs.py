@@ -20,7 +20,9 @@ waits, then asks again.
    ``<log_dir>-refused``, so the test sees only the run that went on) and is run again, up to
    :data:`MAX_RUNS` runs in all;
 3. returns the first run the pre-flight let through, whatever its outcome: a trip or any other
-   failure is the test's to judge, never retried;
+   failure is the test's to judge, never retried; the one exception, asked for by a test whose host is
+   an emulator (``retry_host_stalls``: the vcan stage in User-Mode Linux), is a ``loop_stall`` trip on a
+   stall the loop spent waiting for its deadline, which the emulator made (:func:`host_stall_trip`);
 4. fails the test with every refusal's figures when all :data:`MAX_RUNS` were refused: this host is
    too noisy to run the test at all, and says so.
 
@@ -44,6 +46,7 @@ import pytest
 
 from harness import exit_codes
 from harness.loop.preflight import HostTiming, measure_host_timing
+from harness.loop.timing import GAP_PART_WORDS
 from harness.realtime.host import AUTO, Scheduling, request_fifo, restore_scheduling
 
 #: Runs of one test at most: the first and the retries of runs the pre-flight refused.
@@ -60,6 +63,10 @@ ARM_STALL = "the loop itself stalled"
 ARM_REFUSAL = "could not arm within"
 #: The pre-flight's figures in a refusal: from "host timing at" to the verdict; or the arming stall's figures.
 FIGURES = re.compile(r"host timing at .*?: refused|the loop itself stalled [^:]*")
+#: The words of a trip for a stall past the budget, and of a stall the loop spent waiting for its deadline:
+#: the loop had nothing to do and was not run (the host, or an emulator's virtual CPU, stopped it).
+STALL_TRIP = "tripped (loop_stall)"
+WAITING_STALL = f"the loop was {GAP_PART_WORDS['wait']}"
 #: The name of the counts in a test report's user_properties.
 PROPERTY = "real_time_runs"
 
@@ -73,11 +80,12 @@ class RealTimeRecord:
     refusals: list[str] = field(default_factory=list)
     waited_s: float = 0.0
     never_quiet: int = 0
+    host_stalls: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict:
         """Plain data for a test report's user_properties (crosses from an xdist worker)."""
         return {"what": self.what, "runs": self.runs, "refusals": list(self.refusals), "waited_s": self.waited_s,
-                "never_quiet": self.never_quiet}
+                "never_quiet": self.never_quiet, "host_stalls": list(self.host_stalls)}
 
 
 #: Records made since conftest last collected them (it drains them into the running test's report).
@@ -144,6 +152,23 @@ def refused_by_preflight(done: subprocess.CompletedProcess) -> bool:
     return REFUSAL in output or (ARM_REFUSAL in output and ARM_STALL in output)
 
 
+def host_stall_trip(done: subprocess.CompletedProcess, folders: list[Path]) -> str | None:
+    """The stall's event when ``done`` tripped ``loop_stall`` on a stall the loop spent waiting for its deadline; else None.
+
+    Such a stall is the host not running a loop that had nothing left to do (inside User-Mode Linux, its one
+    virtual CPU stopped for tens of milliseconds); the trip is the supervisor doing its job, and the run says
+    nothing about the path under test. A stall the loop spent in its own work is never this.
+    """
+    if done.returncode != exit_codes.TRIPPED or STALL_TRIP not in _output(done):
+        return None
+    for folder in folders:
+        events = folder / "events.jsonl"
+        for line in events.read_text().splitlines() if events.is_file() else ():
+            if '"stall_past_budget"' in line and WAITING_STALL in line:
+                return line
+    return None
+
+
 def _output(done: subprocess.CompletedProcess) -> str:
     return f"{done.stdout or ''}{done.stderr or ''}"
 
@@ -161,6 +186,7 @@ def _set_aside(log_dir: Path, before: set[Path]) -> None:
 def run_real_time(
     attempt: Callable[[], subprocess.CompletedProcess], *, log_dir: Path, rate_hz: float, stall_budget_s: float,
     what: str, wait: Callable[[float, float], QuietWait] = wait_for_quiet_second, records: list[RealTimeRecord] = RECORDS,
+    retry_host_stalls: bool = False,
 ) -> subprocess.CompletedProcess:
     """Run ``attempt`` after a quiet second; run it again while the pre-flight refuses it (module docstring).
 
@@ -178,6 +204,10 @@ def run_real_time(
         :func:`wait_for_quiet_second`, injectable for tests.
     records : list
         Where the run's :class:`RealTimeRecord` goes: :data:`RECORDS`, or a test's own list.
+    retry_host_stalls : bool
+        Also run again a run that tripped ``loop_stall`` on a stall the loop spent waiting for its deadline
+        (:func:`host_stall_trip`): for a test whose host is an emulator (User-Mode Linux), where such stalls are
+        the emulator's; counted and reported like the refusals, within the same :data:`MAX_RUNS`.
 
     Returns
     -------
@@ -193,8 +223,15 @@ def run_real_time(
         before = set(log_dir.iterdir()) if log_dir.is_dir() else set()
         done = attempt()
         record.runs += 1
+        stall = host_stall_trip(done, sorted(set(log_dir.iterdir()) - before)) if retry_host_stalls and log_dir.is_dir() else None
+        if stall is not None and record.runs < MAX_RUNS:
+            record.host_stalls.append(stall[-300:])
+            print(f"{what}: run {record.runs} tripped on a stall the host made while the loop waited: {stall[-300:]}")
+            _set_aside(log_dir, before)
+            continue
         if not refused_by_preflight(done):
-            print(f"{what}: run {record.runs} went past the pre-flight ({len(record.refusals)} refused before it)")
+            print(f"{what}: run {record.runs} went past the pre-flight ({len(record.refusals)} refused before it, "
+                  f"{len(record.host_stalls)} tripped on the host's stalls)")
             return done
         figures = FIGURES.search(_output(done))
         record.refusals.append(figures.group(0) if figures else _output(done)[-500:])
@@ -216,8 +253,10 @@ def summary_line(records: list[dict]) -> str:
     refused = sum(len(r["refusals"]) for r in records)
     waited = sum(r["waited_s"] for r in records)
     never = sum(r["never_quiet"] for r in records)
+    stalls = sum(len(r.get("host_stalls", ())) for r in records)
     return (f"real-time runs: {len(records)} asked for, {runs} started, {refused} refused by the pre-flight "
-            f"(run again, up to {MAX_RUNS} runs a test), "
+            f"(run again, up to {MAX_RUNS} runs a test), {stalls} tripped on a stall the host made while the loop "
+            f"waited (run again where the test allows), "
             f"{waited:.0f} s spent waiting for a quiet second ({never} runs started without one)")
 
 

@@ -177,3 +177,68 @@ def test_the_summary_line_adds_up_every_tests_runs():
     line = summary_line(records)
     assert line.startswith("real-time runs: 2 asked for, 4 started, 2 refused by the pre-flight")
     assert "41 s spent waiting for a quiet second (1 runs started without one)" in line
+
+
+class StallingAttempts(Attempts):
+    """As :class:`Attempts`; a run that tripped ``loop_stall`` writes the stall's event into its folder."""
+
+    def __init__(self, log_dir: Path, stall_detail: str, *done: subprocess.CompletedProcess) -> None:
+        super().__init__(log_dir, *done)
+        self.stall_detail = stall_detail
+
+    def __call__(self) -> subprocess.CompletedProcess:
+        done = super().__call__()
+        if done.returncode == exit_codes.TRIPPED:
+            (self.log_dir / f"run{self.made}" / "events.jsonl").write_text(
+                '{"kind": "timing", "name": "stall_past_budget", "detail": "' + self.stall_detail + '"}\n')
+        return done
+
+
+WAITED = ("80.9 ms between two ticks (7 missed periods), past the 80.0 ms stall budget: begun in RUNNING; "
+          "the loop was waiting for the next deadline (sleep and spin) for 79.1 ms")
+WORKED = ("80.9 ms between two ticks (7 missed periods), past the 80.0 ms stall budget: begun in RUNNING; "
+          "the loop was in its own work (control) for 79.1 ms")
+
+
+def test_a_host_stall_trip_is_run_again_only_where_the_test_asks_and_is_counted(tmp_path, capsys):
+    records: list[realtime_runs.RealTimeRecord] = []  # made-up runs: kept out of the stage's summary
+    log_dir = tmp_path / "logs"
+    attempts = StallingAttempts(log_dir, WAITED, _done(exit_codes.TRIPPED, out="outcome: tripped (loop_stall)"),
+                                _done(exit_codes.OK, out="completed"))
+    done = run_real_time(attempts, log_dir=log_dir, rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run", wait=_quiet,
+                         records=records, retry_host_stalls=True)
+    assert done.returncode == exit_codes.OK and attempts.made == 2
+    assert [p.name for p in log_dir.iterdir()] == ["run2"]
+    assert len(records[-1].host_stalls) == 1 and "waiting for the next deadline" in records[-1].host_stalls[0]
+    assert "1 tripped on a stall the host made" in summary_line([records[-1].as_dict()])
+    assert "tripped on a stall the host made while the loop waited" in capsys.readouterr().out
+    # not asked for: the trip is the test's to judge
+    plain = StallingAttempts(tmp_path / "plain", WAITED, _done(exit_codes.TRIPPED, out="outcome: tripped (loop_stall)"),
+                             _done(exit_codes.OK))
+    done = run_real_time(plain, log_dir=tmp_path / "plain", rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run",
+                         wait=_quiet, records=records)
+    assert done.returncode == exit_codes.TRIPPED and plain.made == 1
+
+
+def test_a_stall_in_the_loops_own_work_or_another_trip_is_never_run_again(tmp_path):
+    records: list[realtime_runs.RealTimeRecord] = []
+    worked = StallingAttempts(tmp_path / "a", WORKED, _done(exit_codes.TRIPPED, out="outcome: tripped (loop_stall)"),
+                              _done(exit_codes.OK))
+    done = run_real_time(worked, log_dir=tmp_path / "a", rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run",
+                         wait=_quiet, records=records, retry_host_stalls=True)
+    assert done.returncode == exit_codes.TRIPPED and worked.made == 1  # the loop's own work stalled: a finding
+    other = StallingAttempts(tmp_path / "b", WAITED, _done(exit_codes.TRIPPED, out="outcome: tripped (sensor_stale)"),
+                             _done(exit_codes.OK))
+    done = run_real_time(other, log_dir=tmp_path / "b", rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run",
+                         wait=_quiet, records=records, retry_host_stalls=True)
+    assert done.returncode == exit_codes.TRIPPED and other.made == 1
+
+
+def test_a_host_that_stalls_every_run_fails_after_the_most_runs(tmp_path):
+    records: list[realtime_runs.RealTimeRecord] = []
+    tripped = [_done(exit_codes.TRIPPED, out="outcome: tripped (loop_stall)") for _ in range(realtime_runs.MAX_RUNS)]
+    attempts = StallingAttempts(tmp_path, WAITED, *tripped)
+    done = run_real_time(attempts, log_dir=tmp_path, rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run", wait=_quiet,
+                         records=records, retry_host_stalls=True)
+    assert done.returncode == exit_codes.TRIPPED and attempts.made == realtime_runs.MAX_RUNS  # the last is the test's
+    assert len(records[-1].host_stalls) == realtime_runs.MAX_RUNS - 1

@@ -146,12 +146,17 @@ def test_real_time_dry_run_across_processes_over_vcan0(vcan_channel, tmp_path):
     ages, stall accounting) on real SocketCAN, not its timing; it must complete. A run the pre-flight
     refuses, before anything moved, is run again after a quiet second (tests/realtime_runs.py): the
     virtual CPU of UML is stopped for tens of milliseconds whenever the host is busy (CI saw the rig's
-    frames 84 ms old against the 80 ms limit once and failed).
+    frames 84 ms old against the 80 ms limit once and failed). So is a run that tripped ``loop_stall`` on a
+    stall the loop spent waiting for its deadline: inside UML the dry run shows a 50-63 ms stall about once a
+    second (a bare 100 Hz loop in the same UML shows none, with or without an fsync each second), and one of
+    81 ms against the 80 ms budget tripped a CI run; the trip is the supervisor's job done, the emulator's stall
+    says nothing of the SocketCAN path (tests/realtime_runs.py counts and reports each).
     """
     command = ("dry-run", "--interface", "socketcan", "--channel", vcan_channel, "--rate", RT_RATE_HZ, "--quiet",
                "--duration", "5", "--log-dir", str(tmp_path), *SLOW_HOST_REAL_TIME)
     done = run_real_time(lambda: _harness(*command), log_dir=tmp_path, rate_hz=float(RT_RATE_HZ),
-                         stall_budget_s=RT_STALL_BUDGET_S, what=f"harness dry-run on {vcan_channel} at {RT_RATE_HZ} Hz")
+                         stall_budget_s=RT_STALL_BUDGET_S, what=f"harness dry-run on {vcan_channel} at {RT_RATE_HZ} Hz",
+                         retry_host_stalls=True)
     assert done.returncode == exit_codes.OK, done.stdout[-3000:] + done.stderr[-2000:]
     folder = _only_folder(tmp_path)
     metadata = json.loads((folder / "metadata.json").read_text())
