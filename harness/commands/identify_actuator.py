@@ -68,7 +68,7 @@ def band(text: str) -> tuple[float, float]:
 
 
 def add_parser(sub) -> None:
-    from harness.identification.excitation import SIGNALS, Excitation
+    from harness.identification.excitation_settings import SIGNALS, Excitation
 
     default = Excitation()
     parser = sub.add_parser(
@@ -137,7 +137,7 @@ def _confirm(console: Console, can_text: str, excitation) -> Callable[[str], boo
 def run(args: argparse.Namespace, console: Console) -> int:
     from pathlib import Path
 
-    from harness.identification.excitation import Excitation
+    from harness.identification.excitation_settings import Excitation
     from harness.runs.identify import CONDITION_LABELS, Condition, IdentifyOptions, identify_actuator, summary
 
     external = bool(args.interface or args.channel)

@@ -34,11 +34,11 @@ from harness import exit_codes
 from harness.identification.actuator import FIT_PLOT_FILE, ActuatorIdentification, identify_actuator_fit
 from harness.identification.actuator_fit import VELOCITY_FILE
 from harness.identification.excitation import (
-    Excitation,
     ExcitationController,
     check_within_limits,
     excitation_signal,
 )
+from harness.identification.excitation_settings import Excitation
 from harness.identification.frf import FrequencyResponse, h1_estimate, read_frf_csv, write_frf_csv
 from harness.identification.outputs import OVERLAY_FILE, RECORD_FILE, claim_result_folder
 from harness.identification.plot import bode_plot

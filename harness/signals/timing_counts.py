@@ -24,8 +24,10 @@ In lockstep the rig waits for the loop: no gap is measured, and every count is 0
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
 
 #: Slack on the ratio gap / period, so that a gap of exactly two periods, computed in floating point, is a stall.
 _RATIO_SLACK = 1e-9
@@ -75,6 +77,8 @@ class TimingCounts:
     def of_overrun_column(cls, overrun: np.ndarray) -> TimingCounts:
         """The counts of a recorded run, from its ``overrun`` column (NaN rows, if any, skipped)."""
         counts = cls()
+        import numpy as np  # here: the command line's parser imports this module, and numpy costs it 0.16 s
+
         values = np.asarray(overrun, dtype=float)
         for missed in values[np.isfinite(values)]:
             counts.add(int(missed))

@@ -11,7 +11,8 @@ import pytest
 
 from harness import exit_codes
 from harness.cli import main
-from harness.identification.excitation import Excitation, excitation_signal
+from harness.identification.excitation import excitation_signal
+from harness.identification.excitation_settings import Excitation
 from harness.identification.frf import read_frf_csv
 from harness.profile import load_profile
 from harness.recording import load_run

@@ -10,13 +10,12 @@ import pytest
 from drivers.measurements import Measurements
 from harness.control.controllers import Controller
 from harness.identification.excitation import (
-    Excitation,
     ExcitationController,
-    ExcitationError,
     check_within_limits,
     excitation_signal,
     peak_rate_N_per_s,
 )
+from harness.identification.excitation_settings import Excitation, ExcitationError
 from harness.safety.config import ForceConfig
 
 RATE_HZ = 500.0

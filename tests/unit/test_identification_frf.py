@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from harness.identification.excitation import Excitation, excitation_signal
+from harness.identification.excitation import excitation_signal
+from harness.identification.excitation_settings import Excitation
 from harness.identification.frf import FRF_COLUMNS, FrequencyResponse, h1_estimate, read_frf_csv, write_frf_csv
 
 RATE_HZ = 500.0

@@ -143,7 +143,7 @@ def test_a_dry_run_called_directly_is_refused_a_bad_rate_before_anything_starts(
 def test_an_identification_called_directly_is_refused_a_bad_rate_before_anything_starts(tmp_path, monkeypatch):
     """harness/runs/identify.py goes through the session and the virtual rig, which check the rate whoever calls."""
     import harness.runs.dry_run as dry_run_module
-    from harness.identification.excitation import Excitation
+    from harness.identification.excitation_settings import Excitation
     from harness.runs.identify import IdentifyOptions, identify_actuator
 
     monkeypatch.setattr(dry_run_module, "_rig_process", _nothing_may_start)
