@@ -94,7 +94,7 @@ def bare_loop(rate_hz: float, duration_s: float) -> dict:
 
 
 def loop_run(rate_hz: float, duration_s: float, log_dir: Path) -> dict:
-    overrides = [f"loop.rate_hz={rate_hz}", f"can.command_rate_hz={rate_hz}", f"can.sensor_rate_hz={rate_hz}"]
+    overrides = [f"control.rate_hz={rate_hz}"]
     profile = load_profile(REPO / "profiles" / "nceer_4dof.yaml", overrides=overrides)
     options = DryRunOptions(study=StudyOptions(duration_s=duration_s, rate_hz=rate_hz), log_dir=str(log_dir), show_console=False)
     result = dry_run(profile, options)

@@ -34,7 +34,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from harness.model.warmup import warm_up  # noqa: E402
-from harness.motions.config import load_motion  # noqa: E402
+from harness.motions.loading import load_motion  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
 from harness.rig.parts import RigParts  # noqa: E402
 from harness.rig.virtual_rig import VirtualRig  # noqa: E402
@@ -49,8 +49,8 @@ MODELS = {
 
 def rig_cpu(overrides: tuple[str, ...], motion, rate_hz: float, forces: np.ndarray) -> np.ndarray:
     """Thread CPU time (s) of each lockstep step of one rig over the record."""
-    profile = load_profile(None, overrides=list(overrides))
-    can_config = profile.can_settings(rate_hz=rate_hz)
+    profile = load_profile(None, overrides=[*overrides, f"control.rate_hz={rate_hz}"])
+    can_config = profile.can
     bus = can.Bus(interface="virtual", channel=f"bench-rig-{time.monotonic_ns()}", receive_own_messages=False)
     try:
         rig = VirtualRig(RigParts.from_profile(profile), motion, bus, step_period_s=1.0 / rate_hz, lockstep=True,

@@ -65,7 +65,7 @@ def main() -> int:
     timing = result.session.loop.timing
     summary = {
         "minutes": args.minutes,
-        "rate_hz": profile.loop.rate_hz,
+        "rate_hz": profile.control.rate_hz,
         "outcome": result.session.outcome,
         "trip_reason": result.session.trip_reason,
         "rss_first_after_warm_up_mib": after[0] / 1024 if after else None,

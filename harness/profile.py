@@ -84,16 +84,10 @@ class Profile:
         problems = check_config(self.safety)
         if problems:
             raise ValueError("inconsistent safety limits: " + "; ".join(problems))
-        if self.control.rate_hz != self.loop.rate_hz:
-            raise ValueError(
-                f"control.rate_hz is {self.control.rate_hz:g} Hz but loop.rate_hz is {self.loop.rate_hz:g} Hz; "
-                "the controller samples once per tick of the loop, so they must be equal"
-            )
-        if self.loop.rate_hz != self.can.command_rate_hz:
-            raise ValueError(
-                f"loop.rate_hz is {self.loop.rate_hz:g} Hz but can.command_rate_hz is {self.can.command_rate_hz:g} Hz; "
-                "the actuator command is sent once per tick, so they must be equal"
-            )
+        if self.can.loop_rate_hz != self.control.rate_hz:
+            # The one rate (control.rate_hz) reaches the CAN section here, at every construction and
+            # replace, so the command's and the sensors' rates cannot disagree with the loop's.
+            object.__setattr__(self, "can", dataclasses.replace(self.can, loop_rate_hz=self.control.rate_hz))
         panel_period_s = 1.0 / self.can.estop_panel_rate_hz
         if self.safety.estop.panel_required and self.safety.estop.max_panel_age_s < 2.0 * panel_period_s:
             raise ValueError(
@@ -107,15 +101,9 @@ class Profile:
         """Directory of the profile file (relative paths in it are relative to this)."""
         return Path(self.source_path).parent if self.source_path else Path.cwd()
 
-    def can_settings(self, interface: str | None = None, channel: str | None = None, rate_hz: float | None = None) -> CanConfig:
-        """The ``can`` section with the command line's interface and channel, and the loop rate.
-
-        The actuator command and the sensor frames are sent once per tick, so their rates
-        follow ``rate_hz`` when it is given.
-        """
+    def can_settings(self, interface: str | None = None, channel: str | None = None) -> CanConfig:
+        """The ``can`` section with the command line's interface and channel (the rates follow ``control.rate_hz``)."""
         changes: dict = {key: value for key, value in (("interface", interface), ("channel", channel)) if value}
-        if rate_hz:
-            changes.update(command_rate_hz=rate_hz, sensor_rate_hz=rate_hz)
         return dataclasses.replace(self.can, **changes) if changes else self.can
 
     def rig_truth(self) -> RigTruth:
@@ -153,6 +141,7 @@ class Profile:
         source = str(data.pop("loaded_from", ""))
         variant = str(data.pop("variant", ""))
         overlay = data.pop("overlay", None) or {}
+        data = _without_former_rate_keys(data, f"{source} (resolved)")
         profile = _build_checked(data, f"{source} (resolved)")
         return dataclasses.replace(profile, source_path=source, variant=variant,
                                    overlay_path=str(overlay.get("path", "")), overlay_sha256=str(overlay.get("sha256", "")))
@@ -373,9 +362,47 @@ def _own_safety(data: dict, variant: str | None, source: str) -> SafetyConfig:
     return build(SafetyConfig, chosen.get("safety"), source=source, path="safety")
 
 
+#: Keys that held copies of the loop rate before ``control.rate_hz`` became the one source (a run
+#: folder recorded before then carries them in its resolved profile).
+FORMER_RATE_KEYS = (("loop", "rate_hz"), ("can", "command_rate_hz"))
+
+
+def _refuse_former_rate_keys(data: Mapping[str, Any], source: str) -> None:
+    """Refuse ``loop.rate_hz`` and ``can.command_rate_hz`` in a profile with what to write instead."""
+    for section, key in FORMER_RATE_KEYS:
+        if isinstance(data.get(section), Mapping) and key in data[section]:
+            raise ProfileError(
+                f"{section}.{key} is no longer a key: the profile has one rate, control.rate_hz, at which the "
+                "controller samples, the loop ticks and the actuator command goes; remove this key and set "
+                "control.rate_hz (or pass --rate)", source, f"{section}.{key}",
+            )
+
+
+def _without_former_rate_keys(data: dict, source: str) -> dict:
+    """A recorded run's resolved profile without the rate copies it may carry (they had to agree with ``control.rate_hz``).
+
+    A sensor rate equal to the loop's becomes none (once per tick), as the profile now says it.
+    A copy that disagrees is refused: no profile could have been recorded with it.
+    """
+    rate_hz = (data.get("control") or {}).get("rate_hz")
+    data = dict(data)
+    for section, key in FORMER_RATE_KEYS:
+        part = data.get(section)
+        if not isinstance(part, Mapping) or key not in part:
+            continue
+        if part[key] != rate_hz:
+            raise ProfileError(f"found {part[key]!r} Hz, expected control.rate_hz ({rate_hz!r} Hz), which it copied",
+                               source, f"{section}.{key}")
+        data[section] = {name: value for name, value in part.items() if name != key}
+        if section == "can" and data[section].get("sensor_rate_hz") == rate_hz:
+            data[section]["sensor_rate_hz"] = None
+    return data
+
+
 def _build_checked(data: dict, source: str) -> Profile:
     """Build a profile; refuse a ``rig.truth`` that makes an invalid building or bearing, and a force
     limit its protocol or its actuator cannot carry."""
+    _refuse_former_rate_keys(data, source)
     profile = build(Profile, data, source=source)
     try:
         profile.rig_truth()

@@ -19,7 +19,8 @@ import numpy as np
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
 from harness.model.plant import Plant, TableMotion
-from harness.motions.config import RecordConfig, load_motion
+from harness.motions.config import RecordConfig
+from harness.motions.loading import load_motion
 from harness.profile import Profile
 from harness.recording import write_simulation_case
 from harness.signals import columns as layout

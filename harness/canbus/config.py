@@ -18,14 +18,15 @@ from dataclasses import dataclass
 from typing import Literal
 
 from drivers.protocol_values import CURRENT_PROTOCOL_VERSION, SENSOR_SET_PARTS
-from harness.config.schema import quantity
+from harness.config.input_limits import DEFAULT_RATE_HZ
+from harness.config.schema import internal, quantity
 
 #: DBC message name -> the CanConfig field holding its rate (Hz).
 RATE_FIELDS: dict[str, str] = {
     "ESTOP": "estop_rate_hz",
     "ACTUATOR_CMD": "command_rate_hz",
-    "TABLE_SENSORS": "sensor_rate_hz",
-    "BASE_SENSORS": "sensor_rate_hz",
+    "TABLE_SENSORS": "sensor_frame_rate_hz",
+    "BASE_SENSORS": "sensor_frame_rate_hz",
     "ACTUATOR_STATUS": "status_rate_hz",
     "HEARTBEAT": "heartbeat_rate_hz",
     "STORY_DRIFTS": "story_sensor_rate_hz",
@@ -38,7 +39,7 @@ RATE_FIELDS: dict[str, str] = {
 #: The CAN FD protocol (``can.fd: true``, ``drivers/rig_fd.dbc``): SENSOR_SET carries the whole sensor
 #: set at the sensor rate, in place of the four classic sensor messages (``SENSOR_SET_PARTS``), which
 #: are then not sent (0 Hz).
-FD_RATE_FIELDS: dict[str, str] = {"SENSOR_SET": "sensor_rate_hz"}
+FD_RATE_FIELDS: dict[str, str] = {"SENSOR_SET": "sensor_frame_rate_hz"}
 
 #: Further senders of a message, each at its own rate (Hz): the ESTOP ID carries the harness's
 #: (or any node's) active stop at ``estop_rate_hz`` and the panel's heartbeat at ``estop_panel_rate_hz``.
@@ -77,8 +78,16 @@ class CanConfig:
         Largest allowed share of the bitrate (0..1) the configured messages may need.
     protocol_version : int
         The DBC ``ProtocolVersion`` this profile was written for; a different DBC is refused.
-    sensor_rate_hz ... rig_control_rate_hz : float
-        Rates of the messages (Hz); see :data:`RATE_FIELDS`.
+    sensor_rate_hz : float or None
+        Rate of the base-mat and table sensor frames (Hz); None (the default): once per tick of the
+        loop, so ``--rate`` moves them with it. A rig whose sensor concentrator sends at a rate of its
+        own sets it (the loop-rate check refuses one too slow for the loop).
+    story_sensor_rate_hz ... rig_control_rate_hz : float
+        Rates of the other messages (Hz); see :data:`RATE_FIELDS`.
+    loop_rate_hz : float
+        The loop's tick rate (Hz), ``control.rate_hz``: not a key of the section. The profile fills it
+        in (:class:`harness.profile.Profile`), so the one rate the profile sets is the actuator
+        command's rate (:attr:`command_rate_hz`) and, by default, the sensors'.
     timestamp_source : {"poll", "message"}
         Receive time of a sample: the ``now`` passed to ``poll`` (default; same clock
         as the loop), or the frame's own ``msg.timestamp`` (wall-clock epoch seconds for
@@ -102,9 +111,11 @@ class CanConfig:
     data_bitrate_bps: int = quantity(5_000_000, gt=0, le=8_000_000, doc="CAN FD data-phase bitrate (bit/s)")
     max_bus_load: float = quantity(0.5, gt=0.0, le=1.0, doc="largest allowed share of the bitrate")
     protocol_version: int = quantity(CURRENT_PROTOCOL_VERSION, ge=0, doc="ProtocolVersion the profile expects of the DBC")
-    sensor_rate_hz: float = quantity(500.0, unit="Hz", gt=0.0, le=10_000.0, doc="TABLE_SENSORS and BASE_SENSORS rate")
+    sensor_rate_hz: float | None = quantity(
+        None, unit="Hz", gt=0.0, le=10_000.0,
+        doc="TABLE_SENSORS and BASE_SENSORS (FD: SENSOR_SET) rate; none (default): once per tick, control.rate_hz",
+    )
     story_sensor_rate_hz: float = quantity(250.0, unit="Hz", gt=0.0, le=10_000.0, doc="STORY_DRIFTS and FLOOR_ACCELS rate")
-    command_rate_hz: float = quantity(500.0, unit="Hz", gt=0.0, le=10_000.0, doc="ACTUATOR_CMD rate (the control rate)")
     status_rate_hz: float = quantity(250.0, unit="Hz", gt=0.0, le=10_000.0, doc="ACTUATOR_STATUS rate")
     heartbeat_rate_hz: float = quantity(100.0, unit="Hz", gt=0.0, le=10_000.0, doc="HEARTBEAT rate")
     estop_rate_hz: float = quantity(100.0, unit="Hz", gt=0.0, le=10_000.0, doc="ESTOP repetition rate while active (budgeted)")
@@ -119,6 +130,9 @@ class CanConfig:
     max_frames_per_poll: int = quantity(256, gt=0, doc="frames one poll handles at most")
     dbc_path: str = quantity("", doc="DBC file; empty = packaged drivers/rig.dbc")
     peer_group: str = quantity("", doc="seqpacket: a group whose members may join besides this user; empty = this user only")
+    loop_rate_hz: float = internal(
+        DEFAULT_RATE_HZ, doc="the loop's tick rate, control.rate_hz: filled in by the profile, never set in one",
+    )
 
     def __post_init__(self) -> None:
         if not self.interface.strip():
@@ -130,6 +144,16 @@ class CanConfig:
                 f"data_bitrate_bps ({self.data_bitrate_bps}) is below bitrate_bps ({self.bitrate_bps}); "
                 "expected a CAN FD data rate at least the nominal rate"
             )
+
+    @property
+    def command_rate_hz(self) -> float:
+        """ACTUATOR_CMD's rate (Hz): once per tick of the loop, :attr:`loop_rate_hz`."""
+        return self.loop_rate_hz
+
+    @property
+    def sensor_frame_rate_hz(self) -> float:
+        """The base-mat and table sensors' rate (Hz): :attr:`sensor_rate_hz`, or once per tick when it is none."""
+        return self.loop_rate_hz if self.sensor_rate_hz is None else self.sensor_rate_hz
 
     def rates_hz(self) -> dict[str, float]:
         """Message name -> configured rate (Hz), for every message in :data:`RATE_FIELDS`.

@@ -64,7 +64,7 @@ def add_parser(sub) -> None:
     add_bus_options(parser)
     loop = parser.add_argument_group("loop")
     loop.add_argument("--rate", type=number_in(RATE), metavar="HZ",
-                      help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}{LOOP_RATE_HELP}; "
+                      help=f"loop rate (default: the profile's control.rate_hz), {RATE.describe()}{LOOP_RATE_HELP}; "
                       "a whole number of rig.physics_substep_s per period")
     loop.add_argument("--controller", type=non_empty, metavar="NAME",
                       help="a design of the profile (default: control.controller)")

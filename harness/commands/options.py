@@ -285,7 +285,7 @@ def check_run_length(profile, args: argparse.Namespace) -> None:
     """Refuse a run or simulation shorter than :data:`~harness.config.input_limits.MIN_RUN_SAMPLES` control periods.
 
     The record's own lower bound (as many samples of the record) is checked where the record is
-    loaded (``harness.motions.config``). A profile without ``record.duration_s`` runs the whole
+    loaded (``harness.motions.loading``). A profile without ``record.duration_s`` runs the whole
     record, which has at least that many samples.
 
     Parameters

@@ -185,7 +185,7 @@ def _fit(console: Console, motion: Any, profile: Any) -> bool:
 
 def show_command(args: argparse.Namespace, console: Console, profile: Any) -> int:
     """One record after processing: facts, spectrum, table fit, notes, and the plot if asked."""
-    from harness.motions.config import load_raw_and_motion
+    from harness.motions.loading import load_raw_and_motion
     from harness.runs.options import resolve_profile
 
     resolved = resolve_profile(profile, study_options(args))

@@ -65,7 +65,7 @@ def add_parser(sub) -> None:
     add_record_options(parser)
     add_bus_options(parser)
     parser.add_argument("--rate", type=number_in(RATE), metavar="HZ",
-                        help=f"loop rate (default: the profile's loop.rate_hz), {RATE.describe()}{LOOP_RATE_HELP}")
+                        help=f"loop rate (default: the profile's control.rate_hz), {RATE.describe()}{LOOP_RATE_HELP}")
     parser.add_argument("--controller", type=non_empty, metavar="NAME", help="a design of the profile")
     parser.add_argument("--yes", action="store_true", help="do not ask before arming")
     parser.add_argument("--reset-drive", action="store_true", help=RESET_DRIVE_HELP)

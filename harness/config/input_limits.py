@@ -14,8 +14,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-#: Fastest loop or controller sample rate (Hz): the loop schema's bound (``loop.rate_hz <= 5000``,
-#: harness/loop/config.py). A Python tick computes in one to a few hundred us and the host stalls for
+#: The loop's rate when a profile gives none (Hz): ``control.rate_hz``, the one rate the controller
+#: samples at, the loop ticks at and the actuator command goes at (harness/control/config.py).
+DEFAULT_RATE_HZ = 500.0
+
+#: Fastest loop or controller sample rate (Hz): the schema's bound (``control.rate_hz <= 5000``,
+#: harness/control/config.py). A Python tick computes in one to a few hundred us and the host stalls for
 #: 0.2-1 ms and more (benchmarks/README.md: "Timing facts the loop is built on", "Loop compute budget"),
 #: so a faster loop cannot keep its deadlines; a simulation faster than any loop would predict a
 #: test nobody can run. Below this bound the virtual rig's physics

@@ -86,7 +86,8 @@ import math
 import numpy as np
 
 from drivers.measurements import Measurements
-from harness.control.compensation import AdaptiveCompensationConfig, reference_step
+from harness.control.compensation import reference_step
+from harness.control.config import AdaptiveCompensationConfig
 from harness.errors import ModelError
 
 #: Regressors of (C5): F(u), F(u'), F(xdot_b), F(xddot_b); the ring's last column is the filtered command.

@@ -33,101 +33,17 @@ copies both into :class:`harness.safety.health.TickHealth` and the supervisor's
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from drivers.measurements import Measurements
-from harness.config.schema import quantity
 
 if TYPE_CHECKING:
     from harness.safety.health import TickHealth
     from harness.safety.supervisor import SupervisedCommand
 
-#: The methods of ``control.compensation``.
-CompensationName = Literal["none", "model", "adaptive"]
-COMPENSATION_NAMES: tuple[str, ...] = ("none", "model", "adaptive")
-
 #: A command the supervisor sent within this of the compensator's own (N) went out unchanged:
 #: no clamp, ramp, rate limit or fade acted on it (the command frame's resolution is coarser).
 UNCHANGED_TOLERANCE_N = 1.0
-
-
-@dataclass(frozen=True)
-class ModelCompensationConfig:
-    """Settings of the model-based compensator (``control.compensator.model``).
-
-    The actuator's ``k_h`` and ``w_f`` are not settings: they come from ``rig.actuator``
-    (or an identified overlay of it), as for the actuator-aware designs.
-    """
-
-    reference_time_constant_s: float = quantity(
-        0.004, unit="s", gt=0.0, le=0.1,
-        doc="tau_r: the force the actuator is made to follow is f_d through a first-order lag of tau_r (the inverse's roll-off)",
-    )
-    correction_rate_per_s: float = quantity(
-        10.0, unit="1/s", ge=0.0, le=100.0, doc="k_c: integral gain of the load-cell correction (0: no correction)",
-    )
-    correction_limit_N: float = quantity(
-        1000.0, unit="N", gt=0.0, doc="|load-cell correction| bound; below safety.force.tracking_tolerance_N",
-    )
-
-
-@dataclass(frozen=True)
-class AdaptiveCompensationConfig:
-    """Settings of the adaptive time-series compensator (``control.compensator.adaptive``).
-
-    The command is ``u_c = a0 r + a1 r' + a2 xdot_b + a3 xddot_b``; the bounds state the range of actuators
-    it may adapt to (harness/control/adaptive_compensation.py derives the defaults).
-    """
-
-    reference_time_constant_s: float = quantity(
-        0.004, unit="s", gt=0.0, le=0.1, doc="tau_r: the force is made to follow f_d through a first-order lag of tau_r",
-    )
-    start: Literal["none", "model"] = field(default="model", metadata={
-        "doc": "the coefficients before the first fit: none (1, 0, 0, 0) or model (1, 1 / w_f, k_h / w_f of rig.actuator, 0)",
-    })
-    window_s: float = quantity(2.0, unit="s", gt=0.0, le=10.0, doc="length of the moving window the coefficients are fitted over")
-    filter_time_constant_s: float = quantity(
-        0.01, unit="s", gt=0.0, le=0.1, doc="tau_f of the low-pass applied alike to every signal of the fit",
-    )
-    min_excitation: float = quantity(
-        1.0e-3, gt=0.0, lt=1.0, doc="smallest normalized determinant of the window's normal matrix for a new fit",
-    )
-    gain_bounds: tuple[float, ...] = quantity(
-        (0.8, 1.25), gt=0.0, min_len=2, doc="[low, high] of a0, the static gain of the force loop's inverse",
-    )
-    lead_bounds_s: tuple[float, ...] = quantity(
-        (0.0, 0.02), unit="s", ge=0.0, min_len=2, doc="[low, high] of a1, the inverse's lead (1 / w_f and the delays)",
-    )
-    flow_bounds_Ns_per_m: tuple[float, ...] = quantity(
-        (0.0, 200_000.0), unit="N*s/m", ge=0.0, min_len=2, doc="[low, high] of a2, the flow term's gain (k_h / w_f)",
-    )
-    acceleration_bounds_kg: tuple[float, ...] = quantity(
-        (-400.0, 4000.0), unit="kg", min_len=2,
-        doc="[low, high] of a3, the sliding acceleration's gain: what a lagging feed-forward leaves, a sample's lead (C6)",
-    )
-    clip_tolerance_N: float = quantity(
-        1.0, unit="N", gt=0.0, doc="a clip of the fit that changes the window's command by more than this RMS is pinned (C7)",
-    )
-
-    def __post_init__(self) -> None:
-        for name in ("gain_bounds", "lead_bounds_s", "flow_bounds_Ns_per_m", "acceleration_bounds_kg"):
-            bounds = getattr(self, name)
-            if len(bounds) != 2 or not bounds[0] < bounds[1]:
-                raise ValueError(f"{name} must be [low, high] with low < high, found {list(bounds)}")
-        if not self.gain_bounds[0] <= 1.0 <= self.gain_bounds[1]:
-            raise ValueError(f"gain_bounds must hold 1 (the start: the command is the force), found {list(self.gain_bounds)}")
-        if self.window_s < 10.0 * self.filter_time_constant_s:
-            raise ValueError(f"window_s ({self.window_s:g} s) must be at least 10 filter time constants "
-                             f"({10.0 * self.filter_time_constant_s:g} s)")
-
-
-@dataclass(frozen=True)
-class CompensatorSettings:
-    """Settings of each compensation method (``control.compensator``)."""
-
-    model: ModelCompensationConfig = field(default_factory=ModelCompensationConfig)
-    adaptive: AdaptiveCompensationConfig = field(default_factory=AdaptiveCompensationConfig)
 
 
 class Compensator(Protocol):

@@ -1,4 +1,4 @@
-"""Controller designs as profile entries, and building a controller from one.
+"""Controller designs as profile entries: settings only (:mod:`harness.control.factory` builds a controller from one).
 
 A profile's ``control.designs`` maps names (``FSF-I``, ``OF-I``, ``phi``) to one of
 the design dataclasses below, told apart by ``kind``. The two ``*_actuator`` kinds are
@@ -11,21 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-import numpy as np
-
 from harness.config.schema import quantity
-from harness.control.actuator_aware import (
-    ActuatorModel,
-    ActuatorOutputSMC,
-    ActuatorStateFeedbackSMC,
-    actuator_lqr_surface,
-    augmented_model,
-    robust_sliding_margin,
-)
-from harness.control.controllers import Controller, PhiSMC, StateFeedbackSMC
-from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups
-from harness.errors import ModelError
-from harness.model.building import BuildingConfig, state_space
 
 DELTA_DOC = "sliding margin delta >= 0 in N kg s/m (SI, with P B = 1/m_b)"
 
@@ -130,76 +116,3 @@ class OutputActuatorDesign:
 ControllerDesign = (
     FullStateDesign | StaticOutputDesign | SimpleOutputDesign | PhiDesign | StateFeedbackActuatorDesign | OutputActuatorDesign
 )
-
-
-def state_names(n_stories: int) -> list[str]:
-    """Names of the entries of Z in order."""
-    return (
-        [f"x_{j}" for j in range(1, n_stories + 1)]
-        + ["y_b"]
-        + [f"xdot_{j}" for j in range(1, n_stories + 1)]
-        + ["ydot_b"]
-    )
-
-
-def _surface(surface: SurfaceConfig, design_building: BuildingConfig) -> np.ndarray:
-    model = state_space(design_building)
-    if surface.method == "lqr":
-        q = surface.q
-        assert q is not None, "SurfaceConfig.__post_init__: lqr needs q"
-        return lqr_surface(model, q_diagonal_from_groups(model.n_stories, q.drifts, q.base_displacement, q.velocities))
-    return pole_surface(model, np.asarray(surface.poles_per_s))
-
-
-def _measured_mask(measured: tuple[str, ...], n_stories: int) -> np.ndarray:
-    names = state_names(n_stories)
-    unknown = [m for m in measured if m not in names]
-    if unknown:
-        raise ModelError(f"unknown measured state {unknown[0]!r}; expected names from {', '.join(names)}")
-    return np.array([name in measured for name in names])
-
-
-def build_controller(
-    name: str, design: ControllerDesign, design_building: BuildingConfig, actuator: ActuatorModel | None = None,
-) -> Controller:
-    """Make the controller ``name`` from its design, using ``design_building`` as the controller's model.
-
-    ``design_building`` may differ from the plant's building (e.g. stiffness off by
-    -30 % for the robustness study of SPEC 6a). ``actuator`` is the actuator's design model,
-    needed by the ``*_actuator`` kinds only.
-
-    Raises
-    ------
-    ModelError
-        An actuator-aware design without an actuator model, or a surface that is not stable.
-    """
-    if isinstance(design, (StateFeedbackActuatorDesign, OutputActuatorDesign)):
-        if actuator is None:
-            raise ModelError(f"design {name!r} ({design.kind}) needs the actuator's model (rig.actuator)")
-        return _build_actuator_aware(name, design, design_building, actuator)
-    if isinstance(design, (SimpleOutputDesign, PhiDesign)):
-        phi = 1.0 if isinstance(design, SimpleOutputDesign) else design.phi
-        return PhiSMC(
-            name, design_building.base_mass_kg, design_building.restoring_stiffness_N_per_m, design.p1_per_s, phi, design.delta
-        )
-    p_row = _surface(design.surface, design_building)
-    model = state_space(design_building)
-    mask = _measured_mask(design.measured, design_building.n_stories) if isinstance(design, StaticOutputDesign) else None
-    return StateFeedbackSMC(name, model, p_row, design.delta, design.alpha_star, mask)
-
-
-def _build_actuator_aware(
-    name: str, design: StateFeedbackActuatorDesign | OutputActuatorDesign, design_building: BuildingConfig,
-    actuator: ActuatorModel,
-) -> Controller:
-    eta = actuator.bandwidth_rad_s if design.reaching_rate_per_s is None else design.reaching_rate_per_s
-    if isinstance(design, OutputActuatorDesign):
-        delta = design.delta + robust_sliding_margin(design_building.base_mass_kg, actuator, design.actuator_uncertainty)
-        return ActuatorOutputSMC(
-            name, design_building.base_mass_kg, design_building.restoring_stiffness_N_per_m, design.p1_per_s, design.phi,
-            delta, actuator, eta,
-        )
-    model = augmented_model(state_space(design_building), actuator)
-    q = design.q
-    q_state = q_diagonal_from_groups(design_building.n_stories, q.drifts, q.base_displacement, q.velocities)
-    return ActuatorStateFeedbackSMC(name, model, actuator_lqr_surface(model, q_state, q.force), eta)

@@ -11,16 +11,35 @@ from __future__ import annotations
 
 import dataclasses
 
-from harness.control.actuator_aware import ActuatorModel
+import numpy as np
+
+from harness.control.actuator_aware import (
+    ActuatorModel,
+    ActuatorOutputSMC,
+    ActuatorStateFeedbackSMC,
+    actuator_lqr_surface,
+    augmented_model,
+    robust_sliding_margin,
+)
 from harness.control.adaptive_compensation import AdaptiveCompensator
 from harness.control.compensation import Compensator, NoCompensation
-from harness.control.controllers import Controller
-from harness.control.designs import OutputActuatorDesign, StateFeedbackActuatorDesign, build_controller
+from harness.control.controllers import Controller, PhiSMC, StateFeedbackSMC
+from harness.control.designs import (
+    ControllerDesign,
+    OutputActuatorDesign,
+    PhiDesign,
+    SimpleOutputDesign,
+    StateFeedbackActuatorDesign,
+    StaticOutputDesign,
+    SurfaceConfig,
+)
 from harness.control.estimator import FrictionEstimator
 from harness.control.estimator_margin import estimator_yield_displacement_m
 from harness.control.model_compensation import ModelCompensator
 from harness.control.sections import ControlSections
+from harness.control.surfaces import lqr_surface, pole_surface, q_diagonal_from_groups
 from harness.errors import ModelError, ProfileError
+from harness.model.building import BuildingConfig, state_space
 
 
 def make_friction_estimator(profile: ControlSections) -> FrictionEstimator:
@@ -176,3 +195,76 @@ def _actuator_model(profile: ControlSections) -> ActuatorModel:
         return ActuatorModel.from_rig_actuator(profile.rig.actuator)
     except ModelError as err:
         raise ProfileError(str(err), profile.source_path, "rig.actuator.model") from err
+
+
+def state_names(n_stories: int) -> list[str]:
+    """Names of the entries of Z in order."""
+    return (
+        [f"x_{j}" for j in range(1, n_stories + 1)]
+        + ["y_b"]
+        + [f"xdot_{j}" for j in range(1, n_stories + 1)]
+        + ["ydot_b"]
+    )
+
+
+def _surface(surface: SurfaceConfig, design_building: BuildingConfig) -> np.ndarray:
+    model = state_space(design_building)
+    if surface.method == "lqr":
+        q = surface.q
+        assert q is not None, "SurfaceConfig.__post_init__: lqr needs q"
+        return lqr_surface(model, q_diagonal_from_groups(model.n_stories, q.drifts, q.base_displacement, q.velocities))
+    return pole_surface(model, np.asarray(surface.poles_per_s))
+
+
+def _measured_mask(measured: tuple[str, ...], n_stories: int) -> np.ndarray:
+    names = state_names(n_stories)
+    unknown = [m for m in measured if m not in names]
+    if unknown:
+        raise ModelError(f"unknown measured state {unknown[0]!r}; expected names from {', '.join(names)}")
+    return np.array([name in measured for name in names])
+
+
+def build_controller(
+    name: str, design: ControllerDesign, design_building: BuildingConfig, actuator: ActuatorModel | None = None,
+) -> Controller:
+    """Make the controller ``name`` from its design, using ``design_building`` as the controller's model.
+
+    ``design_building`` may differ from the plant's building (e.g. stiffness off by
+    -30 % for the robustness study of SPEC 6a). ``actuator`` is the actuator's design model,
+    needed by the ``*_actuator`` kinds only.
+
+    Raises
+    ------
+    ModelError
+        An actuator-aware design without an actuator model, or a surface that is not stable.
+    """
+    if isinstance(design, (StateFeedbackActuatorDesign, OutputActuatorDesign)):
+        if actuator is None:
+            raise ModelError(f"design {name!r} ({design.kind}) needs the actuator's model (rig.actuator)")
+        return _build_actuator_aware(name, design, design_building, actuator)
+    if isinstance(design, (SimpleOutputDesign, PhiDesign)):
+        phi = 1.0 if isinstance(design, SimpleOutputDesign) else design.phi
+        return PhiSMC(
+            name, design_building.base_mass_kg, design_building.restoring_stiffness_N_per_m, design.p1_per_s, phi, design.delta
+        )
+    p_row = _surface(design.surface, design_building)
+    model = state_space(design_building)
+    mask = _measured_mask(design.measured, design_building.n_stories) if isinstance(design, StaticOutputDesign) else None
+    return StateFeedbackSMC(name, model, p_row, design.delta, design.alpha_star, mask)
+
+
+def _build_actuator_aware(
+    name: str, design: StateFeedbackActuatorDesign | OutputActuatorDesign, design_building: BuildingConfig,
+    actuator: ActuatorModel,
+) -> Controller:
+    eta = actuator.bandwidth_rad_s if design.reaching_rate_per_s is None else design.reaching_rate_per_s
+    if isinstance(design, OutputActuatorDesign):
+        delta = design.delta + robust_sliding_margin(design_building.base_mass_kg, actuator, design.actuator_uncertainty)
+        return ActuatorOutputSMC(
+            name, design_building.base_mass_kg, design_building.restoring_stiffness_N_per_m, design.p1_per_s, design.phi,
+            delta, actuator, eta,
+        )
+    model = augmented_model(state_space(design_building), actuator)
+    q = design.q
+    q_state = q_diagonal_from_groups(design_building.n_stories, q.drifts, q.base_displacement, q.velocities)
+    return ActuatorStateFeedbackSMC(name, model, actuator_lqr_surface(model, q_state, q.force), eta)

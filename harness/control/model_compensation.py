@@ -56,7 +56,8 @@ import math
 
 from drivers.measurements import Measurements
 from harness.control.actuator_aware import ActuatorModel
-from harness.control.compensation import UNCHANGED_TOLERANCE_N, ModelCompensationConfig, reference_step
+from harness.control.compensation import UNCHANGED_TOLERANCE_N, reference_step
+from harness.control.config import ModelCompensationConfig
 from harness.errors import ModelError
 
 

@@ -1,18 +1,22 @@
-"""The ``loop:`` section of a profile: rate, scheduling, run phases and real-time requests."""
+"""The ``loop:`` section of a profile: scheduling, run phases and real-time requests (the rate is ``control.rate_hz``)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 from harness.config.schema import quantity
-from harness.realtime.host import RealtimeConfig
+from harness.realtime.config import RealtimeConfig
 
 
 @dataclass(frozen=True)
 class LoopConfig:
-    """How the control loop runs a test."""
+    """How the control loop runs a test.
 
-    rate_hz: float = quantity(500.0, unit="Hz", gt=0, le=5000, doc="tick rate of the loop")
+    The loop ticks at ``control.rate_hz`` (:class:`harness.control.config.ControlConfig`), the one
+    rate of a profile: the controller samples once per tick and the actuator command goes once per
+    tick, so the rate is set in one place and the others derive from it.
+    """
+
     spin_s: float = quantity(200e-6, unit="s", ge=0, doc="busy-wait before each deadline (at most a tenth of the period)")
     arm_timeout_s: float = quantity(3.0, unit="s", gt=0, doc="how long to wait for every pre-arm check to pass")
     settle_s: float = quantity(0.2, unit="s", ge=0, doc="ARMED time before the table starts")

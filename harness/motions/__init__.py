@@ -26,7 +26,7 @@ from harness.motions.catalog import (
     synthetic_seed,
 )
 from harness.motions.checks import MAX_ABS_ACCEL_G, MIN_SAMPLES
-from harness.motions.config import RecordConfig, load_motion, load_raw
+from harness.motions.config import RecordConfig
 from harness.motions.integration import (
     integrate_from_rest,
     interpolate,
@@ -42,6 +42,7 @@ from harness.motions.limits import (
     table_excesses,
 )
 from harness.motions.loaders import RawRecord, load_record
+from harness.motions.loading import load_motion, load_raw
 from harness.motions.processing import GroundMotion, process_record
 from harness.motions.spectrum import ResponseSpectrum, response_spectrum
 from harness.motions.summary import MotionSummary, summarize

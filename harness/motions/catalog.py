@@ -22,7 +22,7 @@ from pathlib import Path
 
 from harness.config.input_limits import MAX_SEED
 from harness.errors import RecordError
-from harness.motions.white_noise import WHITE_NOISE, white_noise_spec
+from harness.motions.white_noise_name import WHITE_NOISE, white_noise_spec
 
 #: Environment variable that names the records directory.
 ENV_RECORDS_DIR = "HARNESS_RECORDS_DIR"

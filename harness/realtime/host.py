@@ -7,7 +7,8 @@ collector is frozen and disabled for the run (its pauses show as 10-20 ms spikes
 benchmarks/README.md, "Timing facts the loop is built on") and restored afterwards.
 
 SCHED_FIFO (``loop.realtime.fifo_priority``) is ``auto`` by default: the loop's thread takes
-priority :data:`AUTO_LOOP_PRIORITY` and the virtual rig's serving thread :data:`AUTO_RIG_PRIORITY`
+priority :data:`~harness.realtime.config.AUTO_LOOP_PRIORITY` and the virtual rig's serving thread
+:data:`~harness.realtime.config.AUTO_RIG_PRIORITY`
 where the process may (root, CAP_SYS_NICE or an rtprio limit), and runs as before where it may
 not, with one line saying how to permit it. The policy is per thread (Linux); the process's other
 threads (the recorder, the rig's journal), which share the interpreter's lock, go to
@@ -25,20 +26,12 @@ import gc
 import os
 import threading
 from dataclasses import dataclass, field
-from typing import Final, Literal
 
-from harness.config.schema import quantity
+from harness.realtime.config import AUTO, AUTO_LOOP_PRIORITY, RealtimeConfig
 
 _MCL_CURRENT, _MCL_FUTURE = 1, 2
 
 
-#: ``fifo_priority: auto``: use SCHED_FIFO where the process may, else normal scheduling.
-AUTO: Final = "auto"
-#: The loop's priority under ``auto``: above the kernel's threaded interrupt handlers (50) and
-#: below its watchdog and migration threads (99), as real-time control loops usually take.
-AUTO_LOOP_PRIORITY = 80
-#: The virtual rig's process under ``auto``: one below the loop, which wins a shared core.
-AUTO_RIG_PRIORITY = 79
 #: The other threads of a process whose thread takes SCHED_FIFO: they share its interpreter lock,
 #: and one that ordinary load preempts while it holds the lock stalls the real-time thread for a
 #: time slice (priority inversion through the lock: 6-23 ms gaps on a machine with every core busy,
@@ -51,19 +44,6 @@ HOW_TO_PERMIT = (
     "$(readlink -f .venv/bin/python)), or an rtprio limit (a line '<user> - rtprio 90' in "
     "/etc/security/limits.conf, then log in again)"
 )
-
-
-@dataclass(frozen=True)
-class RealtimeConfig:
-    """Real-time requests of the loop (profile section ``loop.realtime``)."""
-
-    fifo_priority: int | Literal["auto"] = quantity(
-        AUTO, ge=0, le=99,
-        doc="SCHED_FIFO priority; auto = 80 for the loop (79 for the virtual rig) where permitted, else normal; 0 = do not ask",
-    )
-    cpu_affinity: tuple[int, ...] = quantity((), ge=0, doc="CPUs to pin the loop to; empty = do not pin")
-    lock_memory: bool = field(default=False, metadata={"doc": "mlockall(MCL_CURRENT | MCL_FUTURE)"})
-    disable_gc: bool = field(default=True, metadata={"doc": "freeze and disable the garbage collector during a run"})
 
 
 @dataclass

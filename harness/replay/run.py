@@ -79,6 +79,6 @@ def _check_same_input(path: Path, run_profile, profile) -> None:
     if profile.can != run_profile.can:
         raise ReplayRefused(f"{path}: a what-if replay feeds the run's recorded frames, so it keeps the run's CAN "
                             "settings; a change under can.* cannot be replayed")
-    if profile.control.rate_hz != run_profile.control.rate_hz or profile.loop.rate_hz != run_profile.loop.rate_hz:
+    if profile.control.rate_hz != run_profile.control.rate_hz:
         raise ReplayRefused(f"{path}: a what-if replay keeps the run's ticks, so it keeps its loop rate "
                             f"({run_profile.control.rate_hz:g} Hz)")

@@ -15,7 +15,8 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
-from harness.realtime.host import AUTO_RIG_PRIORITY, Scheduling, request_fifo, restore_scheduling
+from harness.realtime.config import AUTO_RIG_PRIORITY
+from harness.realtime.host import Scheduling, request_fifo, restore_scheduling
 from harness.realtime.scheduler import FixedRateScheduler
 
 
@@ -35,7 +36,7 @@ def serve(
         Sleep function of the real-time scheduler (default ``time.sleep``).
     fifo_priority : int or "auto"
         ``loop.realtime.fifo_priority``: SCHED_FIFO for this thread while it serves in real time
-        (``auto``: :data:`~harness.realtime.host.AUTO_RIG_PRIORITY`, one below the loop, where
+        (``auto``: :data:`~harness.realtime.config.AUTO_RIG_PRIORITY`, one below the loop, where
         permitted); normal scheduling in lockstep, where the rig runs flat out.
     """
     try:

@@ -31,7 +31,7 @@ class PublishSchedule:
     Parameters
     ----------
     can : CanConfig
-        ``sensor_rate_hz``, ``story_sensor_rate_hz``, ``status_rate_hz``, ``rig_status_rate_hz``.
+        ``sensor_frame_rate_hz``, ``story_sensor_rate_hz``, ``status_rate_hz``, ``rig_status_rate_hz``.
     substep_s : float
         Physics sub-step (s).
     step_period_s : float
@@ -43,7 +43,7 @@ class PublishSchedule:
             return max(1, int(round(1.0 / (rate_hz * substep_s))))
 
         self.periods = (
-            period(can.sensor_rate_hz), period(can.story_sensor_rate_hz),
+            period(can.sensor_frame_rate_hz), period(can.story_sensor_rate_hz),
             period(can.status_rate_hz), period(can.rig_status_rate_hz),
         )
         self.story_every_steps = max(1, int(round(1.0 / (can.story_sensor_rate_hz * step_period_s))))

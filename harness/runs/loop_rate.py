@@ -31,7 +31,7 @@ def given_as(option: str, given: bool, profile: Profile, key: str) -> tuple[str,
     profile : Profile
         The profile whose file and key are named otherwise.
     key : str
-        The profile's key path, e.g. ``loop.rate_hz``.
+        The profile's key path, e.g. ``control.rate_hz``.
     """
     return (option, None) if given else (profile.source_path, key)
 
@@ -45,7 +45,7 @@ def check_loop_rate(profile: Profile, rate_given: bool, *, virtual_rig: bool) ->
 
     - :data:`~harness.config.input_limits.STALL_BUDGET_PERIODS` periods within ``safety.run.max_stall_s``;
     - :data:`~harness.config.input_limits.WATCHDOG_PERIODS` periods within ``rig.drive.watchdog_timeout_s``;
-    - the sensor frames' period (``can.sensor_rate_hz``, which ``--rate`` sets) within
+    - the sensor frames' period (once per tick, or ``can.sensor_rate_hz`` where the profile sets one) within
       ``safety.sensors.max_sensor_age_s``: a sample is up to a period old when a tick reads it;
     - for the virtual rig of a dry run, a whole number of ``rig.physics_substep_s`` per period.
 
@@ -59,18 +59,18 @@ def check_loop_rate(profile: Profile, rate_given: bool, *, virtual_rig: bool) ->
     profile : Profile
         Resolved: ``--rate`` already folded in (``resolve_profile``).
     rate_given : bool
-        True if ``--rate`` set the rate (the message then names it; else ``loop.rate_hz``).
+        True if ``--rate`` set the rate (the message then names it; else ``control.rate_hz``).
     virtual_rig : bool
         True for a dry run.
 
     Raises
     ------
     ProfileError
-        Naming ``--rate`` (or ``loop.rate_hz``), the rate found, the least rate accepted and why.
+        Naming ``--rate`` (or ``control.rate_hz``, or ``can.sensor_rate_hz``), the rate found, the least rate accepted and why.
     """
-    rate_hz = profile.loop.rate_hz
+    rate_hz = profile.control.rate_hz
     period_s = 1.0 / rate_hz
-    source, key = given_as("--rate", rate_given, profile, "loop.rate_hz")
+    source, key = given_as("--rate", rate_given, profile, "control.rate_hz")
     bounds = (
         ("safety.run.max_stall_s", profile.safety.run.max_stall_s, limits.STALL_BUDGET_PERIODS,
          "the shortest stall, one missed deadline, is two periods between ticks"),
@@ -86,14 +86,16 @@ def check_loop_rate(profile: Profile, rate_given: bool, *, virtual_rig: bool) ->
             f"found {rate_hz:g} Hz (a period of {period_s * 1e3:g} ms), expected at least {least_hz:g} Hz: {reasons} "
             "(docs/SAFETY.md, Stall budget; lockstep too is held to this, as it rehearses the real-time loop)", source, key,
         )
-    sensor_period_s = 1.0 / profile.can.sensor_rate_hz
+    sensor_rate_hz = profile.can.sensor_frame_rate_hz
+    sensor_period_s = 1.0 / sensor_rate_hz
     age_s = profile.safety.sensors.max_sensor_age_s
     if sensor_period_s > age_s * (1 + 1e-9):
-        source, key = given_as("--rate", rate_given, profile, "can.sensor_rate_hz")
+        sensor_source, sensor_key = (source, key) if profile.can.sensor_rate_hz is None else (
+            profile.source_path, "can.sensor_rate_hz")
         raise ProfileError(
-            f"found sensor frames every {sensor_period_s * 1e3:g} ms ({profile.can.sensor_rate_hz:g} Hz), expected at "
+            f"found sensor frames every {sensor_period_s * 1e3:g} ms ({sensor_rate_hz:g} Hz), expected at "
             f"least {1.0 / age_s:g} Hz: a sample is up to a period old when a tick reads it, and "
-            f"safety.sensors.max_sensor_age_s is {age_s * 1e3:g} ms", source, key,
+            f"safety.sensors.max_sensor_age_s is {age_s * 1e3:g} ms", sensor_source, sensor_key,
         )
     if virtual_rig:
         _check_rig_substeps(profile, period_s, source, key)
@@ -108,7 +110,7 @@ def _check_rig_substeps(profile: Profile, period_s: float, source: str, key: str
     fewer = max(1, math.floor(period_s / substep_s))
     nearby = sorted({1.0 / (n * substep_s) for n in (fewer, fewer + 1)}, reverse=True)
     raise ProfileError(
-        f"found {profile.loop.rate_hz:g} Hz: its period of {period_s * 1e3:g} ms is not a whole number of the virtual "
+        f"found {profile.control.rate_hz:g} Hz: its period of {period_s * 1e3:g} ms is not a whole number of the virtual "
         f"rig's physics sub-steps (rig.physics_substep_s = {substep_s * 1e3:g} ms); expected a rate such as "
         + " or ".join(f"{rate:g} Hz" for rate in nearby), source, key,
     )

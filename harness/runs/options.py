@@ -54,8 +54,9 @@ def resolve_profile(profile: Profile, options: StudyOptions) -> Profile:
       go to the ``record`` section;
     - ``controller`` (unless ``none``), ``friction``, ``transport_delay_s`` and
       ``design_stiffness_scale`` to ``control``;
-    - ``rate_hz`` to ``control.rate_hz``, ``loop.rate_hz`` and the CAN command and sensor
-      rates, which must agree (the profile checks it).
+    - ``rate_hz`` to ``control.rate_hz``, the one rate: the loop ticks at it and the profile
+      hands it to the CAN section (the command's rate, and the sensors' unless ``can.sensor_rate_hz``
+      sets a rate of their own).
 
     Parameters
     ----------
@@ -68,7 +69,7 @@ def resolve_profile(profile: Profile, options: StudyOptions) -> Profile:
         Validated like a loaded profile (its ``__post_init__`` checks run again).
     """
     from harness.motions import records_dir_from
-    from harness.motions.config import resolve_record_name
+    from harness.motions.loading import resolve_record_name
 
     record = profile.record
     name = options.record if options.record is not None else record.name
@@ -85,12 +86,8 @@ def resolve_profile(profile: Profile, options: StudyOptions) -> Profile:
         rate_hz=options.rate_hz, friction=options.friction, transport_delay_s=options.transport_delay_s,
         design_stiffness_scale=options.design_stiffness_scale,
     ))
-    changes: dict = {"record": record, "control": control}
-    if options.rate_hz is not None:
-        changes["loop"] = dataclasses.replace(profile.loop, rate_hz=options.rate_hz)
-        changes["can"] = profile.can_settings(rate_hz=options.rate_hz)
     try:
-        return dataclasses.replace(profile, **changes)
+        return dataclasses.replace(profile, record=record, control=control)
     except ValueError as err:  # a combination the profile refuses, as it would from the file
         raise ProfileError(f"{err} (with the command line's options)", profile.source_path) from err
 

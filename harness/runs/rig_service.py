@@ -63,7 +63,7 @@ def run_rig_command(
     options : StudyOptions, optional
         Record overrides (``--record``, ``--records-dir``, ``--pga``, ``--time-scale``,
         ``--duration``); ``rate_hz`` (``--rate``) sets the step period (default: the
-        profile's ``loop.rate_hz``, the harness's tick rate).
+        profile's ``control.rate_hz``, the harness's tick rate).
     seed : int, optional
         ``--seed``: noise seed (default ``rig.seed``).
     variant : str, optional

@@ -16,7 +16,7 @@ from pathlib import Path
 from harness.errors import ProfileError, RecordError
 from harness.motions.catalog import RECORD_SUFFIXES, looks_like_path, resolve_record, synthetic_seed
 from harness.motions.loaders import load_record
-from harness.motions.white_noise import white_noise_spec
+from harness.motions.white_noise_name import white_noise_spec
 
 
 @dataclass(frozen=True)

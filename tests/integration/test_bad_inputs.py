@@ -229,8 +229,16 @@ BAD_ARGUMENTS = {
                                                        "rig.drive.watchdog_timeout_s (50 ms"]),
     "run_rate_10": (["run", "--rate", "10", "--yes"], ["--rate", "found 10 Hz", "expected at least 100 Hz"]),
     "rate_profile_key_below_the_bound": (
-        ["dry-run", "--set", "loop.rate_hz=50", "--set", "control.rate_hz=50", "--set", "can.command_rate_hz=50"],
-        ["loop.rate_hz", "found 50 Hz", "expected at least 100 Hz"],
+        ["dry-run", "--set", "control.rate_hz=50"],
+        ["control.rate_hz", "found 50 Hz", "expected at least 100 Hz"],
+    ),
+    "rate_copy_key_of_old": (
+        ["dry-run", "--set", "loop.rate_hz=1000"],
+        ["loop.rate_hz is no longer a key", "one rate, control.rate_hz", "remove this key"],
+    ),
+    "command_rate_copy_key_of_old": (
+        ["dry-run", "--set", "can.command_rate_hz=1000"],
+        ["can.command_rate_hz is no longer a key", "control.rate_hz"],
     ),
     "dry_run_rate_of_no_whole_substeps": (["dry-run", "--rate", "300"], ["--rate", "found 300 Hz", "rig.physics_substep_s",
                                                                          "333.333 Hz or 285.714 Hz"]),
@@ -445,7 +453,7 @@ def test_the_cli_bounds_match_the_profile_schema():
     from dataclasses import fields
 
     from harness.config import input_limits
-    from harness.loop.config import LoopConfig
+    from harness.control.config import ControlConfig
 
-    rate = next(f for f in fields(LoopConfig) if f.name == "rate_hz")
+    rate = next(f for f in fields(ControlConfig) if f.name == "rate_hz")
     assert rate.metadata["le"] == input_limits.MAX_RATE_HZ

@@ -46,8 +46,7 @@ class FdBench(Bench):
     """The bench of tests/integration/test_rig_bus.py on a fresh virtual channel with the FD protocol at 2 kHz."""
 
     def __init__(self, profile, motion):
-        can_config = CanConfig(channel=f"fd-{uuid.uuid4().hex[:10]}", fd=True, sensor_rate_hz=2000.0,
-                               command_rate_hz=2000.0)
+        can_config = CanConfig(channel=f"fd-{uuid.uuid4().hex[:10]}", fd=True, loop_rate_hz=2000.0)
         config = RigConfig(actuator=ActuatorConfig(model="ideal", force_rate_limit_N_per_s=1e9),
                            drive=DriveConfig(watchdog_timeout_s=10.0))
         super().__init__(profile, motion, config, can_config=can_config, period_s=PERIOD)
@@ -168,7 +167,7 @@ def test_classic_frames_on_the_fd_bus_are_rejected_not_read(bench):
 
 
 def test_the_fd_rig_in_real_time_sends_the_set_at_the_sensor_rate(profile, motion):
-    can_config = CanConfig(channel=f"fd-{uuid.uuid4().hex[:10]}", fd=True, sensor_rate_hz=2000.0, command_rate_hz=2000.0)
+    can_config = CanConfig(channel=f"fd-{uuid.uuid4().hex[:10]}", fd=True, loop_rate_hz=2000.0)
     with open_rig(can_config) as rig_link, can.Bus(interface="virtual", channel=can_config.channel) as listener:
         config = dataclasses.replace(RigConfig(), drive=DriveConfig(watchdog_timeout_s=10.0))
         parts = RigParts(profile.structure, profile.bearing, config, profile.simulation.rtol)

@@ -26,7 +26,7 @@ from harness.safety.health import TickHealth
 PROFILE = load_profile()
 RIG, FORCE = PROFILE.rig, PROFILE.safety.force
 HYDRAULICS = RIG.actuator.hydraulics
-PERIOD_S = 1.0 / PROFILE.loop.rate_hz
+PERIOD_S = 1.0 / PROFILE.control.rate_hz
 SENSOR_DELAY_S = 0.001  # the base mat's sensor message delay of the shipped profile (rig.sensors, delay_s)
 SUBSTEP_S = RIG.physics_substep_s
 INNER = 20  # RK4 steps per physics sub-step: well inside the 75 Hz valve and the oil column

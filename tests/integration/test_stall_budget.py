@@ -70,10 +70,10 @@ class StallingController:
 
 
 def _run(stall_s: float, step_N: float = 0.0):
-    profile = load_profile(None)
+    profile = load_profile(None, overrides=[f"control.rate_hz={RATE_HZ}"])
     profile = dataclasses.replace(profile, can=dataclasses.replace(profile.can, interface="virtual"))
     motion = prepare_motion(profile, StudyOptions(duration_s=1.0))
-    can = profile.can_settings("virtual", f"stall-{uuid.uuid4().hex[:8]}", RATE_HZ)
+    can = profile.can_settings("virtual", f"stall-{uuid.uuid4().hex[:8]}")
     rig_link, link = open_rig(can), open_harness(can)
     rig = None
 

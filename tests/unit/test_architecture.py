@@ -251,6 +251,56 @@ def test_the_package_ring_finder_folds_modules_onto_their_packages() -> None:
     assert import_cycles(package_imports(graph)) == [["harness.a", "harness.b", "harness.profile"]]
 
 
+def config_modules(graph: dict[str, set[str]]) -> list[str]:
+    """The settings of each section: every module named ``config`` in a package of ``harness``."""
+    return sorted(module for module in graph if module.startswith("harness.") and module.endswith(".config")
+                  and module != "harness.config")
+
+
+def settings_only(graph: dict[str, set[str]], module: str) -> list[str]:
+    """What ``module`` reaches at run time beyond settings: the foundation, the drivers' protocol values, other
+    section configs, packages' ``__init__`` and leaves (modules that import nothing of the project but those)."""
+    allowed_roots = (*FOUNDATION, "drivers.protocol_values", "drivers.protocol", "drivers")
+
+    def plain(dep: str) -> bool:
+        return any(_in(dep, root) for root in allowed_roots) or dep in graph and dep.endswith(".config")
+
+    def leaf(dep: str) -> bool:
+        return all(plain(inner) or _is_package(inner) for inner in graph.get(dep, ()))
+
+    reached, stack = set(), [module]
+    while stack:
+        for dep in graph.get(stack.pop(), ()):
+            if dep not in reached:
+                reached.add(dep)
+                stack.append(dep)
+    return sorted(dep for dep in reached if not (plain(dep) or _is_package(dep) or leaf(dep)))
+
+
+def _is_package(module: str) -> bool:
+    path = REPO.joinpath(*module.split("."))
+    return (path / "__init__.py").is_file()
+
+
+def test_the_section_configs_hold_settings_only() -> None:
+    """Issue 35, item 4: a section's ``config`` module is settings (dataclasses and their checks), so the profile
+    that gathers them does not start the controllers, the models or the rig: each reaches only the foundation,
+    other configs and leaves of plain settings (the designs, the building's and the bearing's values)."""
+    graph = with_packages_run_first(project_imports(type_checking=False))
+    configs = config_modules(graph)
+    assert {"harness.control.config", "harness.loop.config", "harness.rig.config", "harness.safety.config"} <= set(configs)
+    beyond = {module: settings_only(graph, module) for module in configs}
+    beyond = {module: deps for module, deps in beyond.items() if deps}
+    assert not beyond, f"section configs that reach more than settings: {beyond}"
+
+
+def test_the_settings_rule_sees_logic_behind_a_config() -> None:
+    graph = {"harness.a.config": {"harness.a.logic"}, "harness.a.logic": {"harness.b.solver"}, "harness.b.solver": set(),
+             "harness.b.config": {"harness.config.schema"}, "harness.config.schema": set()}
+    assert settings_only(graph, "harness.a.config") == ["harness.a.logic"]
+    assert settings_only(graph, "harness.b.config") == []
+
+
 #: Layers with a rule of their own: a module may import these only from the layers named.
 #: The live console (``harness.console``) is a view of the loop's status, drawn for a run: it
 #: sits with the runs; so does the replay of a run (``harness.replay``), a run of the loop on its log.

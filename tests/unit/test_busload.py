@@ -58,13 +58,13 @@ def test_load_is_sum_of_rate_times_frame_bits() -> None:
 
 def test_default_config_fits_500_hz_control_at_1_mbit() -> None:
     config = CanConfig()
-    assert config.command_rate_hz >= 500 and config.sensor_rate_hz >= 500
+    assert config.command_rate_hz >= 500 and config.sensor_frame_rate_hz >= 500
     load = check(config)
     assert 0.0 < load.share <= config.max_bus_load
 
 
 def test_overload_is_refused_with_the_figure() -> None:
-    config = dataclasses.replace(CanConfig(), sensor_rate_hz=2000.0, command_rate_hz=2000.0)
+    config = dataclasses.replace(CanConfig(), loop_rate_hz=2000.0)
     share = bus_load(PROTOCOL, config.rates_hz(), config.bitrate_bps).share
     assert share > 0.5
     with pytest.raises(BusLoadError) as info:
@@ -116,7 +116,7 @@ def test_overloaded_link_is_refused_before_the_bus_is_opened(monkeypatch: pytest
         raise AssertionError("the bus was opened for a refused configuration")
 
     monkeypatch.setattr(drivers.link, "open_bus", must_not_open)
-    overloaded = dataclasses.replace(CanConfig(), sensor_rate_hz=2000.0, command_rate_hz=2000.0)
+    overloaded = dataclasses.replace(CanConfig(), loop_rate_hz=2000.0)
     with pytest.raises(BusLoadError, match="exceeds the allowed 50.0%"):
         can_link.open_harness(overloaded)
     with pytest.raises(BusLoadError):

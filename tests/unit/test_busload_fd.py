@@ -83,7 +83,7 @@ def test_a_message_without_brs_runs_its_data_phase_at_the_nominal_rate(tmp_path:
 
 
 def test_fd_rates_replace_the_four_sensor_messages_by_the_set() -> None:
-    rates = CanConfig(fd=True, sensor_rate_hz=2000.0, command_rate_hz=2000.0).rates_hz()
+    rates = CanConfig(fd=True, loop_rate_hz=2000.0).rates_hz()
     assert set(rates) == set(FD.messages)
     assert rates["SENSOR_SET"] == 2000.0
     assert rates["TABLE_SENSORS"] == rates["BASE_SENSORS"] == rates["STORY_DRIFTS"] == rates["FLOOR_ACCELS"] == 0.0
@@ -91,7 +91,7 @@ def test_fd_rates_replace_the_four_sensor_messages_by_the_set() -> None:
 
 
 def test_2_khz_needs_fd_and_fits_it_with_the_default_data_rate() -> None:
-    classic = CanConfig(sensor_rate_hz=2000.0, command_rate_hz=2000.0)
+    classic = CanConfig(loop_rate_hz=2000.0)
     with pytest.raises(BusLoadError, match="85.3%"):
         prepare(classic)
     fd = dataclasses.replace(classic, fd=True)
@@ -143,7 +143,7 @@ def test_socketcan_preflight_asks_for_mtu_72_for_fd(tmp_path: Path) -> None:
 
 def test_the_seqpacket_transport_carries_the_fd_protocol_between_two_nodes() -> None:
     channel = f"fd-{uuid.uuid4().hex[:10]}"
-    rates = CanConfig(fd=True, sensor_rate_hz=2000.0, command_rate_hz=2000.0).rates_hz()
+    rates = CanConfig(fd=True, loop_rate_hz=2000.0).rates_hz()
     with open_rig("seqpacket", channel, 1_000_000, rates, fd=True, data_bitrate_bps=5_000_000) as rig, \
             open_harness("seqpacket", channel, 1_000_000, rates, fd=True, data_bitrate_bps=5_000_000) as harness:
         assert rig.bus.protocol == can.CanProtocol.CAN_FD and harness.bus.protocol == can.CanProtocol.CAN_FD

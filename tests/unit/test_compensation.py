@@ -21,7 +21,8 @@ import pytest
 from drivers.measurements import Measurements
 from harness.control.actuator_aware import ActuatorModel
 from harness.control.adaptive_compensation import AdaptiveCompensator, solve_normalized
-from harness.control.compensation import AdaptiveCompensationConfig, ModelCompensationConfig, NoCompensation
+from harness.control.compensation import NoCompensation
+from harness.control.config import AdaptiveCompensationConfig, ModelCompensationConfig
 from harness.control.factory import build_controller_for_rig, make_compensator
 from harness.control.model_compensation import ModelCompensator
 from harness.errors import ModelError, ProfileError

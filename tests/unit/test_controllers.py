@@ -14,9 +14,8 @@ from harness.control.designs import (
     SimpleOutputDesign,
     StaticOutputDesign,
     SurfaceConfig,
-    build_controller,
-    state_names,
 )
+from harness.control.factory import build_controller, state_names
 from harness.control.surfaces import (
     lqr_surface,
     pole_surface,

@@ -204,7 +204,7 @@ def test_a_motion_source_table_follows_its_drive_exactly() -> None:
 
 
 def test_the_rigs_actuator_delays_limits_and_enables_the_cylinder_of_the_live_plant() -> None:
-    from harness.motions.config import load_motion
+    from harness.motions.loading import load_motion
     from harness.rig.actuator import HydraulicActuator, make_actuator
     from harness.rig.table import TablePlant
 

@@ -7,8 +7,8 @@ import pytest
 
 from harness.errors import RecordError
 from harness.motions import G_M_S2, RecordConfig, load_motion, resolve_record
-from harness.motions.config import load_raw_and_motion
-from harness.motions.white_noise import DEFAULT_PGA_G, WhiteNoiseSpec, white_noise_spec
+from harness.motions.loading import load_raw_and_motion
+from harness.motions.white_noise_name import DEFAULT_PGA_G, WhiteNoiseSpec, white_noise_spec
 
 
 def _band_share(motion, low_hz: float, high_hz: float) -> float:

@@ -15,7 +15,8 @@ from harness.cli import build_parser
 from harness.commands.options import check_run_length
 from harness.config.input_limits import MIN_RUN_SAMPLES
 from harness.errors import ProfileError, RecordError
-from harness.motions.config import SYNTHETIC_DT_S, load_motion
+from harness.motions.config import SYNTHETIC_DT_S
+from harness.motions.loading import load_motion
 from harness.profile import load_profile
 from harness.runs.loop_rate import check_loop_rate
 from harness.runs.options import StudyOptions, resolve_profile
@@ -67,8 +68,8 @@ def test_sensor_frames_slower_than_the_sensor_age_are_refused_at_their_key():
 
 
 def test_the_profile_key_is_named_when_the_rate_came_from_the_profile():
-    profile = load_profile(RIG, overrides=["loop.rate_hz=50", "control.rate_hz=50", "can.command_rate_hz=50"])
-    with pytest.raises(ProfileError, match=r"nceer_4dof.yaml: loop.rate_hz: found 50 Hz"):
+    profile = load_profile(RIG, overrides=["control.rate_hz=50"])
+    with pytest.raises(ProfileError, match=r"nceer_4dof.yaml: control.rate_hz: found 50 Hz"):
         check_loop_rate(profile, False, virtual_rig=False)
 
 
@@ -147,11 +148,10 @@ def test_an_identification_called_directly_is_refused_a_bad_rate_before_anything
     from harness.runs.identify import IdentifyOptions, identify_actuator
 
     monkeypatch.setattr(dry_run_module, "_rig_process", _nothing_may_start)
-    profile = load_profile(RIG, overrides=["loop.rate_hz=50", "control.rate_hz=50", "can.command_rate_hz=50",
-                                           "can.sensor_rate_hz=50"])
+    profile = load_profile(RIG, overrides=["control.rate_hz=50"])
     options = IdentifyOptions(Excitation("chirp", 1000.0, (1.0, 10.0), 4.0, resolution_hz=1.0), tmp_path / "id", lockstep=True,
                               show_console=False)
-    with pytest.raises(ProfileError, match=r"loop.rate_hz.*found 50 Hz .* expected at least 100 Hz"):
+    with pytest.raises(ProfileError, match=r"control.rate_hz.*found 50 Hz .* expected at least 100 Hz"):
         identify_actuator(profile, options)
 
 

@@ -14,7 +14,8 @@ from harness.console.live import LiveConsole, stroke_bar
 from harness.loop.operator import OperatorSignals
 from harness.loop.status import LoopStatus
 from harness.loop.timing import TimingStats
-from harness.realtime.host import RealtimeConfig, apply_realtime, restore_realtime
+from harness.realtime.config import RealtimeConfig
+from harness.realtime.host import apply_realtime, restore_realtime
 
 
 def test_realtime_requests_are_granted_or_refused_plainly_and_gc_is_restored():

@@ -80,7 +80,8 @@ def test_the_console_never_shows_record_time_past_the_record() -> None:
 
 
 def test_white_noise_under_a_time_scale_says_it_plays_its_band_not_compressed() -> None:
-    from harness.motions.config import RecordConfig, load_raw_and_motion
+    from harness.motions.config import RecordConfig
+    from harness.motions.loading import load_raw_and_motion
 
     _, motion = load_raw_and_motion(RecordConfig(), base_dir=".", name="white_noise:0.5-5", time_scale=2.0, duration_s=10.0,
                                     env={})

@@ -8,11 +8,8 @@ import pytest
 
 from harness.profile import load_profile
 from harness.realtime import host
+from harness.realtime.config import AUTO, AUTO_LOOP_PRIORITY, AUTO_RIG_PRIORITY, RealtimeConfig
 from harness.realtime.host import (
-    AUTO,
-    AUTO_LOOP_PRIORITY,
-    AUTO_RIG_PRIORITY,
-    RealtimeConfig,
     apply_realtime,
     request_fifo,
     restore_realtime,

@@ -163,7 +163,7 @@ def test_the_shipped_profile_has_a_usable_rig_section():
 
     profile = load_profile(PROFILES / "nceer_4dof.yaml")
     rig = profile.rig
-    period = 1.0 / profile.loop.rate_hz
+    period = 1.0 / profile.control.rate_hz
     assert abs(period / rig.physics_substep_s - round(period / rig.physics_substep_s)) < 1e-9
     assert rig.actuator.model == "servo_hydraulic" and rig.table.model == "servo_hydraulic"
     assert rig.actuator.force_limit_N <= 30_000.0

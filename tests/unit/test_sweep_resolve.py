@@ -39,7 +39,7 @@ def test_no_override_is_the_base_profile_itself():
     [
         (("bearing.mu_max=-0.1",), r"bearing.mu_max: found -0.1, expected a value >= 0"),
         (("bearing.mu_delta=0.2",), r"mu_delta = 0.2 exceeds mu_max = 0.1"),
-        (("control.rate_hz=500",), r"control.rate_hz is 500 Hz but loop.rate_hz is 250 Hz"),
+        (("loop.rate_hz=500",), r"loop.rate_hz is no longer a key: the profile has one rate, control.rate_hz"),
         (("bearing.friction=1",), r"unknown key 'friction'"),
     ],
 )

@@ -29,7 +29,7 @@ SENSOR_SET_ID, CLASSIC_SENSOR_IDS = 0x32, {0x30, 0x31, 0x200, 0x201}
 
 
 def test_fd_frames_of_the_protocol_cross_vcan0(vcan_fd_channel):
-    rates = CanConfig(fd=True, sensor_rate_hz=2000.0, command_rate_hz=2000.0).rates_hz()
+    rates = CanConfig(fd=True, loop_rate_hz=2000.0).rates_hz()
     with open_rig("socketcan", vcan_fd_channel, 1_000_000, rates, fd=True, data_bitrate_bps=5_000_000) as rig, \
             open_harness("socketcan", vcan_fd_channel, 1_000_000, rates, fd=True, data_bitrate_bps=5_000_000) as harness:
         values = [0.012345, -0.5, 3.0, 0.0101, 0.25, -1.0, 0.001, -0.002, 0.003, 9.0, -8.0, 7.0]
