@@ -2,7 +2,7 @@
 
 The paper designs its surfaces on Eq. 6-7, where the controller's force ``u`` acts on the
 base mat the moment it is computed. On a rig the force comes from a cylinder under a force
-loop (:mod:`harness.model.hydraulics`); below the loop's bandwidth ``w_f`` its force obeys
+loop (:mod:`harness.hydraulics.cylinder`); below the loop's bandwidth ``w_f`` its force obeys
 
     udot = w_f (u_c - u) - k_h xdot_b,        xdot_b = ydot_b - xdot_0              (A1)
 
@@ -126,6 +126,7 @@ from drivers.measurements import Measurements
 from harness.control.controllers import PhiSMC, _SlidingModeInternals
 from harness.control.surfaces import lqr_surface, sliding_poles
 from harness.errors import ModelError
+from harness.hydraulics import linear
 from harness.model.building import StateSpace
 
 
@@ -154,7 +155,7 @@ class ActuatorModel:
     @property
     def loop_damping_Ns_per_m(self) -> float:
         """``k_h / w_f`` (N s/m): the damper the force loop leaves between table and base mat."""
-        return self.stiffness_N_per_m / self.bandwidth_rad_s
+        return linear.loop_damping_Ns_per_m(self.stiffness_N_per_m, self.bandwidth_rad_s)
 
     def scaled(self, stiffness: float = 1.0, bandwidth: float = 1.0) -> ActuatorModel:
         """The model with ``k_h`` and ``w_f`` multiplied (model-error studies)."""
@@ -166,9 +167,10 @@ class ActuatorModel:
 
         ``servo_hydraulic``: ``w_f = 2 pi force_loop_bandwidth_hz`` and the velocity feedback
         the servo controller leaves (``rig.actuator.hydraulics``,
-        :meth:`~harness.model.hydraulics.HydraulicActuatorConfig.velocity_feedback_Ns_per_m`):
-        with velocity feed-forward at gain ``alpha`` the term ``k_h xdot_b`` of (A1) becomes
-        ``(1 - alpha) k_h xdot_b`` (SPEC 7a'), so ``k_h`` here is ``(1 - alpha) k_h``.
+        :meth:`~harness.hydraulics.cylinder.HydraulicActuatorConfig.feedback_stiffness_N_per_m`,
+        from :mod:`harness.hydraulics.linear`): with velocity feed-forward at gain ``alpha`` the
+        term ``k_h xdot_b`` of (A1) becomes ``(1 - alpha) k_h xdot_b`` (SPEC 7a'), so ``k_h`` here
+        is ``(1 - alpha) k_h``.
         ``first_order``: a force source, ``k_h = 0`` and ``w_f = 1 / time_constant_s``.
 
         Raises
@@ -178,8 +180,7 @@ class ActuatorModel:
         """
         if actuator.model == "servo_hydraulic":
             hydraulics = actuator.hydraulics
-            bandwidth = 2.0 * math.pi * hydraulics.force_loop_bandwidth_hz
-            return cls(hydraulics.velocity_feedback_Ns_per_m() * bandwidth, bandwidth)
+            return cls(hydraulics.feedback_stiffness_N_per_m(), hydraulics.bandwidth_rad_s())
         if actuator.model == "first_order":
             return cls(0.0, 1.0 / actuator.time_constant_s)
         raise ModelError(

@@ -2,7 +2,7 @@
 
 A controller asks for the force ``f_d`` it wants on the base mat. A servo-hydraulic actuator
 under a proportional force loop does not give it: below its loop bandwidth ``w_f`` its force
-obeys (SPEC 7a, harness/model/hydraulics.py)
+obeys (SPEC 7a, harness/hydraulics/cylinder.py)
 
     udot = w_f (u_c - u) - k_h xdot_b,                                               (C1)
 

@@ -79,7 +79,7 @@ def estimator_loop(
     k0 = friction_at_rest_N / bearing.yield_displacement_m
     own_yield_m = estimator_yield_displacement_m(profile) if estimator_yield_m is None else estimator_yield_m
     k0_estimator = friction_at_rest_N / own_yield_m
-    w_f = 2.0 * math.pi * hydraulics.force_loop_bandwidth_hz
+    w_f = hydraulics.bandwidth_rad_s()
     w_v, z_v = 2.0 * math.pi * cylinder.valve_bandwidth_hz, cylinder.valve_damping_ratio
     s = 2j * math.pi * np.asarray(freq_hz, dtype=float)
     valve = w_v**2 / (s * s + 2.0 * z_v * w_v * s + w_v**2)

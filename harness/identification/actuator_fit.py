@@ -2,7 +2,7 @@
 
 Linearised about zero load pressure (the orifice's ``sqrt((p_s - sign(x_v) p_L) / p_s)`` is
 within 7 % of 1 at the 2 kN excitation), the servo-valve driven cylinder under its force loop
-(:mod:`harness.model.hydraulics`) gives, with the loop's gain on a blocked piston
+(:mod:`harness.hydraulics.cylinder`) gives, with the loop's gain on a blocked piston
 ``w_f = K_p (4 beta_e / V_t) A q_nl`` and the valve ``G_v(s) = w_v^2 / (s^2 + 2 zeta_v w_v s + w_v^2)``::
 
     F = [w_f G_v(s) u_c - k_h xdot_b] / D(s),     D(s) = s + c + w_f G_v(s)        (F1)
@@ -46,9 +46,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
+from harness.hydraulics import linear
+from harness.hydraulics.cylinder import HydraulicActuatorConfig
 from harness.identification.fit_statistics import covariance, relative_error
 from harness.identification.frf import FrequencyResponse
-from harness.model.hydraulics import HydraulicActuatorConfig
 
 #: The measured response from the command to the sliding velocity, free condition (m/s per N).
 VELOCITY_FILE = "frf_velocity.csv"
@@ -119,13 +120,20 @@ class ActuatorParameters:
         c, feedforward = hydraulics.cylinder, hydraulics.feedforward
         return cls(
             hydraulics.force_loop_bandwidth_hz, c.valve_bandwidth_hz, c.valve_damping_ratio, delay_s,
-            c.hydraulic_stiffness_N_per_m, c.hydraulic_stiffness_N_per_m * c.leakage_m3_per_s_Pa / c.piston_area_m2**2,
+            c.hydraulic_stiffness_N_per_m,
+            linear.leakage_pole_per_s(c.hydraulic_stiffness_N_per_m, c.leakage_m3_per_s_Pa, c.piston_area_m2),
             velocity_lag_s, feedforward.gain, feedforward.velocity_filter_hz, feedforward.lvdt.delay_s + 0.5 * sample_s,
         )
 
     def velocity_feedback_Ns_per_m(self) -> float:
         """``c_eff = (1 - alpha) k_h / w_f`` (N s/m): the force lost per m/s of stroke at low frequency and no load."""
-        return (1.0 - self.feedforward_gain) * self.hydraulic_stiffness_N_per_m / (2.0 * np.pi * self.force_loop_bandwidth_hz)
+        return linear.velocity_feedback_Ns_per_m(
+            self.hydraulic_stiffness_N_per_m, self.bandwidth_rad_s(), self.feedforward_gain,
+        )
+
+    def bandwidth_rad_s(self) -> float:
+        """``w_f`` (rad/s): the force loop's bandwidth on a blocked piston."""
+        return linear.angular_frequency_rad_s(self.force_loop_bandwidth_hz)
 
     def vector(self) -> np.ndarray:
         """The :data:`FITTED` values."""
@@ -139,9 +147,9 @@ class ActuatorParameters:
 def _loop_terms(p: ActuatorParameters, freq_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(w_f G_v, D, e^{-s tau})`` at ``s = j 2 pi f``."""
     s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
-    w_v = 2.0 * np.pi * p.valve_bandwidth_hz
+    w_v = linear.angular_frequency_rad_s(p.valve_bandwidth_hz)
     valve = w_v**2 / (s**2 + 2.0 * p.valve_damping_ratio * w_v * s + w_v**2)
-    gain = 2.0 * np.pi * p.force_loop_bandwidth_hz * valve
+    gain = p.bandwidth_rad_s() * valve
     return gain, s + p.leakage_pole_per_s + gain, np.exp(-s * p.delay_s)
 
 
@@ -159,7 +167,7 @@ def _bleed_stiffness(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
     if p.feedforward_gain == 0.0:
         return np.full(np.shape(freq_hz), p.hydraulic_stiffness_N_per_m, dtype=complex)
     s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
-    w_v = 2.0 * np.pi * p.valve_bandwidth_hz
+    w_v = linear.angular_frequency_rad_s(p.valve_bandwidth_hz)
     valve = w_v**2 / (s**2 + 2.0 * p.valve_damping_ratio * w_v * s + w_v**2)
     sensed = np.exp(-s * p.feedforward_delay_s) / (1.0 + s / (2.0 * np.pi * p.feedforward_filter_hz))
     return p.hydraulic_stiffness_N_per_m * (1.0 - p.feedforward_gain * valve * sensed)
@@ -275,11 +283,11 @@ class ActuatorFit:
             return None
         p = self.parameters
         value = p.velocity_feedback_Ns_per_m()
-        omega = 2.0 * np.pi * p.force_loop_bandwidth_hz
+        omega = p.bandwidth_rad_s()
         partials = {
             "hydraulic_stiffness_N_per_m": (1.0 - p.feedforward_gain) / omega,
             "force_loop_bandwidth_hz": -value / p.force_loop_bandwidth_hz,
-            "feedforward_gain": -p.hydraulic_stiffness_N_per_m / omega,
+            "feedforward_gain": -linear.loop_damping_Ns_per_m(p.hydraulic_stiffness_N_per_m, omega),
         }
         gradient = np.array([partials.get(name, 0.0) for name in self.fitted])
         return value, float(math.sqrt(max(float(gradient @ self.covariance @ gradient), 0.0)))
@@ -374,6 +382,9 @@ def _valve_correlation(p: ActuatorParameters, measured: Measured) -> float:
 
 
 def bulk_modulus_Pa(hydraulic_stiffness_N_per_m: float, hydraulics: HydraulicActuatorConfig) -> float:
-    """``beta_e = k_h V_t / (4 A^2)`` (Pa) with the cylinder's geometry from the profile."""
+    """``beta_e = k_h V_t / (4 A^2)`` (Pa) with the cylinder's geometry from the profile.
+
+    :func:`harness.hydraulics.linear.bulk_modulus_Pa` on ``rig.actuator.hydraulics.cylinder``'s ``A`` and ``V_t``.
+    """
     c = hydraulics.cylinder
-    return hydraulic_stiffness_N_per_m * c.oil_volume_m3 / (4.0 * c.piston_area_m2**2)
+    return linear.bulk_modulus_Pa(hydraulic_stiffness_N_per_m, c.piston_area_m2, c.oil_volume_m3)

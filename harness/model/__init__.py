@@ -1,4 +1,6 @@
-"""The building, its bearings, the rig's hydraulics and the compiled kernel that integrates them.
+"""The building, its bearings and the compiled kernel that integrates them with the rig's hydraulics.
+
+The hydraulics' equations live in :mod:`harness.hydraulics`; the kernel calls them.
 
 Importing the package first drops numba's cached kernels if any kernel source changed
 (:func:`harness.model.kernel_cache.drop_stale_kernels`): numba alone would keep a caller

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from harness.model import hydraulics as hy
+from harness.hydraulics import cylinder as hy
 from harness.model.bearing import friction_force, hysteretic_rate
 
 #: The first step from a reset state (s). Long enough to cost nothing, short enough that a
@@ -100,7 +100,7 @@ def derivative(
     """``out = dy/dt`` for ``y = (Z, nu[, rig states])`` (Eq. 3-7).
 
     With an empty ``rig`` the table follows the record exactly and ``u`` is the actuator
-    force (N). Otherwise ``rig`` is :func:`harness.model.hydraulics.pack_rig`'s array, ``y``
+    force (N). Otherwise ``rig`` is :func:`harness.hydraulics.cylinder.pack_rig`'s array, ``y``
     carries the rig's states after ``nu`` and, with a servo-hydraulic actuator, ``u`` is
     the force command (N) of its force loop.
     """
@@ -225,7 +225,7 @@ def advance(
     work : ndarray (9 * len(y) + 1,)
         Scratch space; ``work[0]`` carries the last accepted step size between calls.
     rig : ndarray
-        The rig's packed parameters (:func:`harness.model.hydraulics.pack_rig`), or empty.
+        The rig's packed parameters (:func:`harness.hydraulics.cylinder.pack_rig`), or empty.
 
     Returns
     -------

@@ -7,11 +7,13 @@ index of each kernel, before anything is loaded, whether it holds an entry for t
 kernel's current source (numba keys its index by the source file's time stamp and size).
 
 Numba keys each kernel's cache on its own source file alone, and freezes the globals it
-reads (constants such as :mod:`harness.model.hydraulics`' parameter offsets) and the
+reads (constants such as :mod:`harness.hydraulics.cylinder`' parameter offsets) and the
 kernels it calls into the compiled code. A change to a callee's file would leave a caller
 compiled against the old one. :func:`drop_stale_kernels` therefore fingerprints every file
-that holds kernels and, when the fingerprint changed, removes their cached code, so every
-kernel compiles again. :mod:`harness.model` calls it when first imported.
+that holds kernels (in :mod:`harness.model` and :mod:`harness.hydraulics`) and, when the
+fingerprint changed, removes their cached code from each file's ``__pycache__``, so every
+kernel compiles again. :mod:`harness.model` calls it when first imported, before the
+integrator, the one caller across the two folders, is loaded.
 """
 
 from __future__ import annotations
@@ -22,10 +24,11 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-#: The files that hold numba kernels which call one another (one folder: :mod:`harness.model`).
-KERNEL_DIR = Path(__file__).resolve().parent
-KERNEL_FILES = ("bearing.py", "hydraulics.py", "integrator.py")
-#: Where the fingerprint of the kernels' sources is kept, beside numba's cache files.
+#: The folder the kernel files are named from: the ``harness`` package.
+KERNEL_DIR = Path(__file__).resolve().parent.parent
+#: The files that hold numba kernels which call one another, relative to :data:`KERNEL_DIR`.
+KERNEL_FILES = ("model/bearing.py", "hydraulics/cylinder.py", "model/integrator.py")
+#: Where the fingerprint of the kernels' sources is kept (``KERNEL_DIR/__pycache__``).
 FINGERPRINT_NAME = "kernel_sources.sha256"
 
 #: The module whose numba dispatchers :func:`harness.model.warmup.warm_up` calls.
@@ -66,10 +69,21 @@ def kernel_fingerprint(directory: Path = KERNEL_DIR, files: Iterable[str] = KERN
     return digest.hexdigest()
 
 
-def drop_stale_kernels(directory: Path = KERNEL_DIR, files: Iterable[str] = KERNEL_FILES) -> bool:
-    """Remove numba's cached kernels of ``directory`` when its kernels' sources changed.
+def _cached_code(directory: Path, files: tuple[str, ...]) -> list[Path]:
+    """numba's cache files (index and code) of the kernels in ``files``, each in its own folder's ``__pycache__``."""
+    found: list[Path] = []
+    for name in files:
+        source = directory / name
+        cache = source.parent / "__pycache__"
+        if cache.is_dir():
+            found.extend(path for path in cache.glob("*.nb[ic]") if path.name.startswith(source.stem + "."))
+    return found
 
-    Returns True if cached code was removed. Does nothing, quietly, where the cache folder
+
+def drop_stale_kernels(directory: Path = KERNEL_DIR, files: Iterable[str] = KERNEL_FILES) -> bool:
+    """Remove numba's cached kernels of ``files`` (relative to ``directory``) when any of their sources changed.
+
+    Returns True if cached code was removed. Does nothing, quietly, where a cache folder
     cannot be written (numba then uses its own cache folder, keyed the same way).
     """
     files = tuple(files)
@@ -79,8 +93,7 @@ def drop_stale_kernels(directory: Path = KERNEL_DIR, files: Iterable[str] = KERN
         fingerprint = kernel_fingerprint(directory, files)
         if stamp.is_file() and stamp.read_text().strip() == fingerprint:
             return False
-        stems = tuple(Path(name).stem + "." for name in files)
-        stale = [path for path in cache.glob("*.nb[ic]") if path.name.startswith(stems)] if cache.is_dir() else []
+        stale = _cached_code(directory, files)
         for path in stale:
             path.unlink(missing_ok=True)
         cache.mkdir(exist_ok=True)

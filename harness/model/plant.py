@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drivers.measurements import Measurements
-from harness.model import hydraulics as hy
+from harness.hydraulics import cylinder as hy
 from harness.model.bearing import BearingConfig, friction_force
 from harness.model.building import (
     BuildingConfig,
@@ -93,7 +93,7 @@ class Plant:
     rtol : float
         Relative tolerance of the kernel (absolute tolerances scale with it).
     rig_params : ndarray, optional
-        The rig's hydraulics (:func:`harness.model.hydraulics.pack_rig`); the state then
+        The rig's hydraulics (:func:`harness.hydraulics.cylinder.pack_rig`); the state then
         carries the table's and the cylinders' states after ``nu`` (SPEC 7a, 7b). An array
         shared between plants (the rig's held and record plants) shares its enable flag.
     """

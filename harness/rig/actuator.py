@@ -15,7 +15,7 @@ Every model then obeys ``|dF/dt| <= force_rate_limit_N_per_s`` and
 with ``decay_time_constant_s`` whatever the model.
 
 ``servo_hydraulic`` (:class:`HydraulicActuator`) is not a force source: the cylinder's
-pressure is part of the plant's state (:mod:`harness.model.hydraulics`), so its force
+pressure is part of the plant's state (:mod:`harness.hydraulics.cylinder`), so its force
 depends on how the base mat moves. The actuator object then delays the command, limits
 it as the servo controller's command range does, and sets the drive's enable flag that
 the plant's force loop reads.
@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import expm
 
-from harness.model import hydraulics as hy
-from harness.model.servo_controller import StrokeVelocityFeedforward
+from harness.hydraulics import cylinder as hy
+from harness.hydraulics.servo_controller import StrokeVelocityFeedforward
 from harness.rig.config import ActuatorConfig, RigConfig
 from harness.rig.grid import half_up
 from harness.rig.truth import true_hydraulics

@@ -12,7 +12,7 @@ from typing import Literal
 
 from harness.config.input_limits import MAX_SEED
 from harness.config.schema import quantity
-from harness.model.hydraulics import HydraulicActuatorConfig, TableConfig
+from harness.hydraulics.cylinder import HydraulicActuatorConfig, TableConfig
 from harness.rig.faults import fault_id_for
 from harness.rig.truth import TruthConfig
 

@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from harness.errors import ModelError
+from harness.hydraulics.cylinder import BASE_PINNED, pack_rig
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, acceleration_maps
-from harness.model.hydraulics import BASE_PINNED, pack_rig
 from harness.model.plant import Plant, TableMotion
 from harness.rig.truth import true_hydraulics
 

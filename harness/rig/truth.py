@@ -40,10 +40,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from harness.errors import ProfileError
+from harness.hydraulics.cylinder import CylinderConfig, HydraulicActuatorConfig
+from harness.hydraulics.servo_controller import VelocityFeedforwardConfig
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig, fixed_base_modes
-from harness.model.hydraulics import CylinderConfig, HydraulicActuatorConfig
-from harness.model.servo_controller import VelocityFeedforwardConfig
 
 #: Key path of the section in a profile, for messages.
 TRUTH_KEY = "rig.truth"

@@ -1,8 +1,8 @@
 """A base mat that seizes at peak sliding velocity: the pressure transient of a blocked piston (issue 31, item 2).
 
 The shipped rig's control actuator (its cylinder, valve and force loop, the compiled rates of
-harness/model/hydraulics.py, and its servo controller's velocity feed-forward through the stroke
-LVDT's delay and filter, harness/model/servo_controller.py) strokes at a steady sliding velocity
+harness/hydraulics/cylinder.py, and its servo controller's velocity feed-forward through the stroke
+LVDT's delay and filter, harness/hydraulics/servo_controller.py) strokes at a steady sliding velocity
 under the harness's command at its bound, and the piston is blocked at once. The harness's own
 flow term (``model`` compensation on a plain loop) acts on the measured velocity through the
 sensor's delay and a tick before it sees the stop. docs/SAFETY.md, "What max_force_N must bound",
@@ -17,8 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from harness.model.hydraulics import ACTUATOR_CYLINDER, RELIEF_OVERPRESSURE, cylinder_rates, force_loop_current, pack_rig
-from harness.model.servo_controller import StrokeVelocityFeedforward
+from harness.hydraulics.cylinder import ACTUATOR_CYLINDER, RELIEF_OVERPRESSURE, cylinder_rates, force_loop_current, pack_rig
+from harness.hydraulics.servo_controller import StrokeVelocityFeedforward
 from harness.profile import load_profile
 from harness.safety.actuator_detectors import LoadCellLimit
 from harness.safety.health import TickHealth

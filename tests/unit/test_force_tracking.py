@@ -16,9 +16,9 @@ import math
 import numpy as np
 import pytest
 
-from harness.model import hydraulics as hy
+from harness.hydraulics import cylinder as hy
+from harness.hydraulics.servo_controller import StrokeVelocityFeedforward
 from harness.model.plant import Plant, TableMotion
-from harness.model.servo_controller import StrokeVelocityFeedforward
 from harness.profile import load_profile
 from harness.safety.actuator_detectors import ForceTracking
 from harness.safety.health import TickHealth

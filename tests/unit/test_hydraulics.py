@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from harness.model import hydraulics as hy
+from harness.hydraulics import cylinder as hy
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
 from harness.model.plant import Plant, TableMotion

@@ -14,9 +14,14 @@ import math
 import numpy as np
 import pytest
 
-from harness.model import hydraulics as hy
+from harness.hydraulics import cylinder as hy
+from harness.hydraulics.servo_controller import (
+    StrokeLvdtConfig,
+    StrokeVelocityFeedforward,
+    VelocityFeedforwardConfig,
+    steady_bleed_N,
+)
 from harness.model.plant import Plant, TableMotion
-from harness.model.servo_controller import StrokeLvdtConfig, StrokeVelocityFeedforward, VelocityFeedforwardConfig, steady_bleed_N
 from tests.unit.test_hydraulics import ACTUATOR, CYLINDER, FRICTIONLESS, IMMOVABLE  # the same known plant
 
 SUBSTEP_S = 0.0005

@@ -13,11 +13,11 @@ digital controllers' feed-forward gain for force control of soft specimens)::
 own stroke LVDT (noise, quantization and conversion delay), through a first-order low-pass
 at ``velocity_filter_hz``. ``alpha`` is the fraction of nominal cancellation and ``K_q`` the
 controller's nominal valve gain (``rig.actuator.hydraulics``, the design), not the plant's.
-In the normalized units of :mod:`harness.model.hydraulics` (``K_v = 1``, ``K_q = q_nl``) the
+In the normalized units of :mod:`harness.hydraulics.cylinder` (``K_v = 1``, ``K_q = q_nl``) the
 feed-forward current is ``alpha A v_s / q_nl``.
 
 The law's force-loop part is evaluated continuously in the plant's derivative
-(:func:`harness.model.hydraulics.force_loop_current`); the feed-forward current is the
+(:func:`harness.hydraulics.cylinder.force_loop_current`); the feed-forward current is the
 digital part, computed once per physics sub-step by :class:`StrokeVelocityFeedforward`
 and held over it, as a servo controller's sample-and-hold does.
 

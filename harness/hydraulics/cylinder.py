@@ -18,7 +18,9 @@ pass the valve's whole flow ``q_nl`` at 2 % over-pressure, which bounds the forc
 
 In force terms ``dF/dt = (4 beta_e A / V_t)(q - C_l F / A) - k_h xdot`` with the hydraulic
 stiffness ``k_h = 4 beta_e A^2 / V_t``: the last term is the natural velocity feedback.
-Any motion of the piston bleeds force unless the valve supplies the matching flow.
+Any motion of the piston bleeds force unless the valve supplies the matching flow. The
+loop's linearised relations (``k_h``, ``K_p``, ``k_h / w_f`` ...) are written once, in
+:mod:`harness.hydraulics.linear`; the configurations here call them.
 
 The two servo loops:
 
@@ -27,7 +29,7 @@ The two servo loops:
   ``i = K_p (u_cmd - A p_L) + i_ff``, with ``K_p`` set so that the loop on a blocked piston
   has the bandwidth ``w_f``: ``K_p = w_f V_t / (4 beta_e A q_nl)``, and ``i_ff = alpha A v_s /
   q_nom`` the feed-forward current from the stroke LVDT's filtered derivative
-  (:mod:`harness.model.servo_controller`), held over a sub-step in the packed parameters.
+  (:mod:`harness.hydraulics.servo_controller`), held over a sub-step in the packed parameters.
   Disabled (tripped or not armed), the spool is centred and the cross-port bypass opens,
   so the pressure decays with the drive's decay time constant.
 - shaking table, three-variable control of the platform (mass ``m_t``): the flow demand is
@@ -52,7 +54,8 @@ import numba
 import numpy as np
 
 from harness.config.schema import quantity
-from harness.model.servo_controller import VelocityFeedforwardConfig
+from harness.hydraulics import linear
+from harness.hydraulics.servo_controller import VelocityFeedforwardConfig
 
 # ------------------------------------------------------------ packed parameters
 #: Flags: the table is a servo-hydraulic platform; the control actuator is servo-hydraulic;
@@ -102,7 +105,7 @@ class CylinderConfig:
     @property
     def hydraulic_stiffness_N_per_m(self) -> float:
         """``k_h = 4 beta_e A^2 / V_t`` (N/m): the oil column's stiffness, blocked valve."""
-        return 4.0 * self.bulk_modulus_Pa * self.piston_area_m2**2 / self.oil_volume_m3
+        return linear.hydraulic_stiffness_N_per_m(self.bulk_modulus_Pa, self.piston_area_m2, self.oil_volume_m3)
 
     @property
     def force_capacity_N(self) -> float:
@@ -112,13 +115,13 @@ class CylinderConfig:
     @property
     def pressure_gain_Pa_per_m3(self) -> float:
         """``4 beta_e / V_t`` (Pa/m^3)."""
-        return 4.0 * self.bulk_modulus_Pa / self.oil_volume_m3
+        return linear.pressure_gain_Pa_per_m3(self.bulk_modulus_Pa, self.oil_volume_m3)
 
     def packed(self) -> tuple[float, ...]:
         """The cylinder's block of :func:`pack_rig` (order of the offsets AREA ... RELIEF)."""
         return (
             self.piston_area_m2, self.supply_pressure_Pa, self.pressure_gain_Pa_per_m3, self.leakage_m3_per_s_Pa,
-            self.valve_flow_m3_per_s, 2.0 * math.pi * self.valve_bandwidth_hz, self.valve_damping_ratio,
+            self.valve_flow_m3_per_s, linear.angular_frequency_rad_s(self.valve_bandwidth_hz), self.valve_damping_ratio,
             self.valve_flow_m3_per_s / (RELIEF_OVERPRESSURE * self.supply_pressure_Pa),
         )
 
@@ -140,11 +143,14 @@ class HydraulicActuatorConfig:
     )
     feedforward: VelocityFeedforwardConfig = field(default_factory=VelocityFeedforwardConfig)
 
+    def bandwidth_rad_s(self) -> float:
+        """``w_f = 2 pi force_loop_bandwidth_hz`` (rad/s): the force loop's bandwidth on a blocked piston."""
+        return linear.angular_frequency_rad_s(self.force_loop_bandwidth_hz)
+
     def force_gain_per_N(self) -> float:
         """``K_p = w_f V_t / (4 beta_e A q_nl)`` (1/N): normalized valve current per newton of force error."""
         c = self.cylinder
-        omega = 2.0 * math.pi * self.force_loop_bandwidth_hz
-        return omega / (c.pressure_gain_Pa_per_m3 * c.piston_area_m2 * c.valve_flow_m3_per_s)
+        return linear.force_gain_per_N(self.bandwidth_rad_s(), c.pressure_gain_Pa_per_m3, c.piston_area_m2, c.valve_flow_m3_per_s)
 
     def loop_damping_Ns_per_m(self) -> float:
         """``k_h / w_f`` (N s/m): the force loop's parasitic damping between table and base mat.
@@ -153,20 +159,26 @@ class HydraulicActuatorConfig:
         ``u_cmd - (k_h / w_f) xdot_b``: the natural velocity feedback, which the proportional
         force loop reduces only by its own gain.
         """
-        return self.cylinder.hydraulic_stiffness_N_per_m / (2.0 * math.pi * self.force_loop_bandwidth_hz)
+        return linear.loop_damping_Ns_per_m(self.cylinder.hydraulic_stiffness_N_per_m, self.bandwidth_rad_s())
 
     def feedforward_current_per_m_s(self) -> float:
         """``A / q_nl`` (s/m): the normalized valve current that passes the flow of 1 m/s of stroke at no load."""
-        return self.cylinder.piston_area_m2 / self.cylinder.valve_flow_m3_per_s
+        return linear.feedforward_current_per_m_s(self.cylinder.piston_area_m2, self.cylinder.valve_flow_m3_per_s)
 
     def velocity_feedback_Ns_per_m(self) -> float:
         """``c_eff = (1 - alpha) k_h / w_f`` (N s/m): the velocity feedback left at no load with the feed-forward.
 
         The force lost per m/s of stroke at low frequency and zero load pressure, the feed-forward
-        acting on the nominal valve gain (SPEC 7a'); :func:`harness.model.servo_controller.steady_bleed_N`
+        acting on the nominal valve gain (SPEC 7a'); :func:`harness.hydraulics.servo_controller.steady_bleed_N`
         gives it at a load pressure.
         """
-        return (1.0 - self.feedforward.gain) * self.loop_damping_Ns_per_m()
+        return linear.velocity_feedback_Ns_per_m(
+            self.cylinder.hydraulic_stiffness_N_per_m, self.bandwidth_rad_s(), self.feedforward.gain,
+        )
+
+    def feedback_stiffness_N_per_m(self) -> float:
+        """``(1 - alpha) k_h = c_eff w_f`` (N/m): the gain on the stroke velocity in the first-order model (A1) (SPEC 7a')."""
+        return linear.velocity_feedback_stiffness_N_per_m(self.velocity_feedback_Ns_per_m(), self.bandwidth_rad_s())
 
 
 @dataclass(frozen=True)
@@ -192,7 +204,7 @@ class TableConfig:
 
     def pressure_feedback_m3_per_s_Pa(self) -> float:
         """``C_dp = 2 zeta_dp w_oil V_t / (4 beta_e)`` (m^3/(s Pa))."""
-        omega_oil = 2.0 * math.pi * self.oil_column_hz()
+        omega_oil = linear.angular_frequency_rad_s(self.oil_column_hz())
         return 2.0 * self.pressure_feedback_damping_ratio * omega_oil / self.cylinder.pressure_gain_Pa_per_m3
 
 
@@ -226,7 +238,7 @@ def pack_rig(
         rig[ACTUATOR_BYPASS] = 1.0 / (decay_time_constant_s * actuator.cylinder.pressure_gain_Pa_per_m3)
     rig[TABLE_CYLINDER : TABLE_CYLINDER + _CYLINDER_SIZE] = table.cylinder.packed()
     rig[TABLE_MASS] = table.platform_mass_kg
-    rig[TABLE_POSITION_GAIN] = 2.0 * math.pi * table.position_loop_bandwidth_hz
+    rig[TABLE_POSITION_GAIN] = linear.angular_frequency_rad_s(table.position_loop_bandwidth_hz)
     rig[TABLE_PRESSURE_FEEDBACK] = table.pressure_feedback_m3_per_s_Pa()
     rig[BASE_MASS] = base_mass_kg
     return rig
@@ -244,7 +256,7 @@ def force_loop_current(gain_per_N: float, command_N: float, measured_N: float, f
     """The servo controller's law (SPEC 7a'): ``i = K_p (u_cmd - u_meas) + i_ff`` (normalized current).
 
     ``i_ff = alpha A v_s / q_nom`` is the velocity feed-forward
-    (:class:`harness.model.servo_controller.StrokeVelocityFeedforward`), 0 for a plain loop.
+    (:class:`harness.hydraulics.servo_controller.StrokeVelocityFeedforward`), 0 for a plain loop.
     """
     return gain_per_N * (command_N - measured_N) + feedforward
 
