@@ -167,7 +167,7 @@ class ActuatorModel:
 
         ``servo_hydraulic``: ``w_f = 2 pi force_loop_bandwidth_hz`` and the velocity feedback
         the servo controller leaves (``rig.actuator.hydraulics``,
-        :meth:`~harness.hydraulics.cylinder.HydraulicActuatorConfig.feedback_stiffness_N_per_m`,
+        :meth:`~harness.hydraulics.config.HydraulicActuatorConfig.feedback_stiffness_N_per_m`,
         from :mod:`harness.hydraulics.linear`): with velocity feed-forward at gain ``alpha`` the
         term ``k_h xdot_b`` of (A1) becomes ``(1 - alpha) k_h xdot_b`` (SPEC 7a'), so ``k_h`` here
         is ``(1 - alpha) k_h``.

@@ -9,7 +9,7 @@ under its proportional force loop obeys, below the valve's bandwidth (SPEC 7a)::
 and with the servo controller's velocity feed-forward at gain ``alpha`` (SPEC 7a') the
 velocity feedback left is ``c = (1 - alpha) k_h / w_f`` (N s/m). These functions are the one
 place these relations are written: the compiled plant's parameters
-(:class:`harness.hydraulics.cylinder.HydraulicActuatorConfig`), the design models
+(:class:`harness.hydraulics.config.HydraulicActuatorConfig`), the design models
 (:class:`harness.control.actuator_aware.ActuatorModel`, and through it the compensators) and
 the identification (:mod:`harness.identification.actuator_fit`) all call them.
 

@@ -36,31 +36,10 @@ table's own loop has it (``rig.table.pressure_feedback_damping_ratio``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from harness.config.schema import quantity
-
-
-@dataclass(frozen=True)
-class StrokeLvdtConfig:
-    """The actuator's own stroke LVDT as its servo controller reads it."""
-
-    noise_std_m: float = quantity(3.0e-6, unit="m", ge=0.0, le=1.0e-3, doc="white noise std of the stroke reading")
-    quantization_m: float = quantity(3.1e-6, unit="m", ge=0.0, le=1.0e-3, doc="conditioning's step (0: none)")
-    delay_s: float = quantity(5.0e-4, unit="s", ge=0.0, le=0.05, doc="conversion and demodulation delay")
-
-
-@dataclass(frozen=True)
-class VelocityFeedforwardConfig:
-    """``rig.actuator.hydraulics.feedforward``: the servo controller's velocity feed-forward."""
-
-    gain: float = quantity(1.0, ge=0.0, le=1.5, doc="alpha, fraction of nominal cancellation A / (K_q K_v) (0: none)")
-    velocity_filter_hz: float = quantity(
-        50.0, unit="Hz", gt=0.0, le=2000.0, doc="corner of the first-order low-pass on the LVDT's derivative",
-    )
-    lvdt: StrokeLvdtConfig = field(default_factory=StrokeLvdtConfig)
+from harness.hydraulics.config import VelocityFeedforwardConfig
 
 
 def orifice_gain(load_pressure_Pa: float, supply_pressure_Pa: float, flow_sign: float) -> float:

@@ -47,7 +47,7 @@ import numpy as np
 from scipy import optimize
 
 from harness.hydraulics import linear
-from harness.hydraulics.cylinder import HydraulicActuatorConfig
+from harness.hydraulics.config import HydraulicActuatorConfig
 from harness.identification.fit_statistics import covariance, relative_error
 from harness.identification.frf import FrequencyResponse
 

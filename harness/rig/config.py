@@ -7,20 +7,86 @@ or a second-order servo; scheduled faults use the ids of :mod:`harness.rig.fault
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 from harness.config.input_limits import MAX_SEED
 from harness.config.schema import quantity
-from harness.hydraulics.cylinder import HydraulicActuatorConfig, TableConfig
+from harness.hydraulics.config import CylinderConfig, HydraulicActuatorConfig, TableConfig, VelocityFeedforwardConfig
+from harness.model.bearing import BearingConfig
+from harness.model.building import BuildingConfig
 from harness.rig.faults import fault_id_for
-from harness.rig.truth import TruthConfig
 
 FaultKind = Literal[
     "dropout", "stuck", "spike", "noise_burst", "corrupt_crc", "repeat_counter", "skip_counter",
     "extra_delay", "bus_silence", "drive_fault", "pressure_lost", "estop", "sign_flip", "polarity", "seize",
 ]
 FaultTarget = Literal["", "TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS", "ACTUATOR_STATUS", "RIG_STATUS"]
+
+
+def _like(design: type, name: str) -> Any:
+    """An optional override field: no value by default, with the design field's unit, range and doc."""
+    metadata = next(f.metadata for f in dataclasses.fields(design) if f.name == name)
+    return field(default=None, metadata=metadata)
+
+
+@dataclass(frozen=True)
+class StructureTruth:
+    """``rig.truth.structure``: the fields of ``structure`` (:class:`BuildingConfig`), each optional."""
+
+    floor_masses_kg: tuple[float, ...] | None = _like(BuildingConfig, "floor_masses_kg")
+    base_mass_kg: float | None = _like(BuildingConfig, "base_mass_kg")
+    story_stiffness_N_per_m: tuple[float, ...] | None = _like(BuildingConfig, "story_stiffness_N_per_m")
+    story_damping_Ns_per_m: tuple[float, ...] | None = _like(BuildingConfig, "story_damping_Ns_per_m")
+    first_mode_damping_ratio: float | None = _like(BuildingConfig, "first_mode_damping_ratio")
+    restoring_stiffness_N_per_m: float | None = _like(BuildingConfig, "restoring_stiffness_N_per_m")
+    assumptions: str | None = _like(BuildingConfig, "assumptions")
+
+
+@dataclass(frozen=True)
+class BearingTruth:
+    """``rig.truth.bearing``: the fields of ``bearing`` (:class:`BearingConfig`), each optional."""
+
+    mu_max: float | None = _like(BearingConfig, "mu_max")
+    mu_delta: float | None = _like(BearingConfig, "mu_delta")
+    a_mu_s_per_m: float | None = _like(BearingConfig, "a_mu_s_per_m")
+    yield_displacement_m: float | None = _like(BearingConfig, "yield_displacement_m")
+    alpha: float | None = _like(BearingConfig, "alpha")
+    beta: float | None = _like(BearingConfig, "beta")
+    gamma: float | None = _like(BearingConfig, "gamma")
+    eta: float | None = _like(BearingConfig, "eta")
+
+
+@dataclass(frozen=True)
+class ActuatorTruth:
+    """``rig.truth.actuator``: the control actuator's hydraulics as the rig really has them, each optional.
+
+    ``rig.actuator`` is what the lab believes of its actuator (the class of equipment, or an
+    identification's overlay); these values are the rig's, hidden from everything but the
+    virtual rig's plant and ``simulate --rig-effects``' twin. The force loop's gain ``K_p``
+    follows the true cylinder: a lab tunes it on its rig to ``force_loop_bandwidth_hz``. The
+    servo controller's velocity feed-forward keeps the believed nominal valve gain ``A / q_nl``
+    (SPEC 7a'): ``feedforward_gain`` is the fraction the rig's controller is really set to, and
+    a true ``valve_flow_m3_per_s`` that differs leaves the mismatch in the plant.
+    """
+
+    force_loop_bandwidth_hz: float | None = _like(HydraulicActuatorConfig, "force_loop_bandwidth_hz")
+    feedforward_gain: float | None = _like(VelocityFeedforwardConfig, "gain")
+    valve_flow_m3_per_s: float | None = _like(CylinderConfig, "valve_flow_m3_per_s")
+    bulk_modulus_Pa: float | None = _like(CylinderConfig, "bulk_modulus_Pa")
+    valve_bandwidth_hz: float | None = _like(CylinderConfig, "valve_bandwidth_hz")
+    valve_damping_ratio: float | None = _like(CylinderConfig, "valve_damping_ratio")
+    leakage_m3_per_s_Pa: float | None = _like(CylinderConfig, "leakage_m3_per_s_Pa")
+
+
+@dataclass(frozen=True)
+class TruthConfig:
+    """``rig.truth``: the virtual rig's own structure, bearing and actuator values; empty = the rig is the design."""
+
+    structure: StructureTruth = field(default_factory=StructureTruth)
+    bearing: BearingTruth = field(default_factory=BearingTruth)
+    actuator: ActuatorTruth = field(default_factory=ActuatorTruth)
 
 
 @dataclass(frozen=True)

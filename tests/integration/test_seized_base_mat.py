@@ -17,7 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from harness.hydraulics.cylinder import ACTUATOR_CYLINDER, RELIEF_OVERPRESSURE, cylinder_rates, force_loop_current, pack_rig
+from harness.hydraulics.config import RELIEF_OVERPRESSURE
+from harness.hydraulics.cylinder import ACTUATOR_CYLINDER, cylinder_rates, force_loop_current, pack_rig
 from harness.hydraulics.servo_controller import StrokeVelocityFeedforward
 from harness.profile import load_profile
 from harness.safety.actuator_detectors import LoadCellLimit

@@ -16,6 +16,7 @@ import math
 import numpy as np
 import pytest
 
+from harness.hydraulics import config as hydraulics_config
 from harness.hydraulics import cylinder as hy
 from harness.hydraulics.servo_controller import StrokeVelocityFeedforward
 from harness.model.plant import Plant, TableMotion
@@ -60,7 +61,7 @@ def _sliding_plant(velocity_m_s: float, duration_s: float) -> Plant:
     """The shipped actuator pushing a base mat that stays still while the table moves at ``-velocity``."""
     times = np.arange(0.0, duration_s + 0.01, 0.01)
     table = TableMotion(0.01, np.zeros(times.size), np.full(times.size, -velocity_m_s), -velocity_m_s * times)
-    params = hy.pack_rig(ACTUATOR, hy.TableConfig(model="motion_source"), IMMOVABLE.base_mass_kg, False, 0.02)
+    params = hy.pack_rig(ACTUATOR, hydraulics_config.TableConfig(model="motion_source"), IMMOVABLE.base_mass_kg, False, 0.02)
     params[hy.ENABLED] = 1.0
     plant = Plant(IMMOVABLE, FRICTIONLESS, table, 1e-6, params)
     plant.reset()

@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from harness.hydraulics import config as hydraulics_config
 from harness.hydraulics import cylinder as hy
 from harness.model.bearing import BearingConfig
 from harness.model.building import BuildingConfig
@@ -37,8 +38,8 @@ def _table_at_velocity(velocity_m_s: float, duration_s: float) -> TableMotion:
 
 
 def _actuator_plant(table: TableMotion, *, pinned: bool = False, building: BuildingConfig = IMMOVABLE,
-                    actuator: hy.HydraulicActuatorConfig = ACTUATOR) -> Plant:
-    params = hy.pack_rig(actuator, hy.TableConfig(model="motion_source"), building.base_mass_kg, pinned, 0.02)
+                    actuator: hydraulics_config.HydraulicActuatorConfig = ACTUATOR) -> Plant:
+    params = hy.pack_rig(actuator, hydraulics_config.TableConfig(model="motion_source"), building.base_mass_kg, pinned, 0.02)
     params[hy.ENABLED] = 1.0
     plant = Plant(building, FRICTIONLESS, table, 1e-6, params)
     plant.reset()
@@ -118,7 +119,7 @@ def test_without_the_valve_the_moving_piston_loses_force_at_the_hydraulic_stiffn
 def test_pressure_saturation_bounds_the_force_at_area_times_supply() -> None:
     plant = _actuator_plant(_table_at_velocity(0.0, 2.0), pinned=True)
     forces = np.array(_run(plant, 3.0 * CYLINDER.force_capacity_N, 2.0))
-    assert forces.max() <= CYLINDER.force_capacity_N * (1 + hy.RELIEF_OVERPRESSURE)
+    assert forces.max() <= CYLINDER.force_capacity_N * (1 + hydraulics_config.RELIEF_OVERPRESSURE)
     assert forces[-1] > 0.97 * CYLINDER.force_capacity_N
 
 
@@ -141,12 +142,12 @@ def test_flow_saturation_bounds_the_velocity_at_which_force_is_held() -> None:
     assert slow_flow == pytest.approx(needed, rel=1e-3)
     assert fast_spool >= 1.0  # beyond it the spool is on its stop, the valve's flow at its limit ...
     # ... and the force is lost: the pressure sits on the relief, within its over-pressure.
-    assert -CYLINDER.supply_pressure_Pa * (1 + hy.RELIEF_OVERPRESSURE) <= pressure < -CYLINDER.supply_pressure_Pa
+    assert -CYLINDER.supply_pressure_Pa * (1 + hydraulics_config.RELIEF_OVERPRESSURE) <= pressure < -CYLINDER.supply_pressure_Pa
     assert lost < -0.99 * CYLINDER.force_capacity_N
 
 
 def test_the_valve_flow_is_bounded_by_its_stops_and_the_supply() -> None:
-    params = hy.pack_rig(ACTUATOR, hy.TableConfig(), 1000.0, False, 0.02)
+    params = hy.pack_rig(ACTUATOR, hydraulics_config.TableConfig(), 1000.0, False, 0.02)
     q_nl, supply = CYLINDER.valve_flow_m3_per_s, CYLINDER.supply_pressure_Pa
     assert hy.valve_flow(5.0, 0.0, params, hy.ACTUATOR_CYLINDER) == pytest.approx(q_nl)
     assert hy.valve_flow(1.0, supply, params, hy.ACTUATOR_CYLINDER) == 0.0  # no drop across the valve, no flow in
@@ -196,7 +197,7 @@ def test_the_tables_tracking_error_grows_with_the_payloads_reaction() -> None:
 def test_a_motion_source_table_follows_its_drive_exactly() -> None:
     building = PROFILE.structure
     drive = TableMotion(0.01, np.zeros(101), np.full(101, 0.1), 0.1 * np.arange(101) * 0.01)
-    params = hy.pack_rig(ACTUATOR, hy.TableConfig(model="motion_source"), building.base_mass_kg, False, 0.02)
+    params = hy.pack_rig(ACTUATOR, hydraulics_config.TableConfig(model="motion_source"), building.base_mass_kg, False, 0.02)
     plant = Plant(building, PROFILE.bearing, drive, 1e-6, params)
     plant.reset()
     plant.advance(0.0, 0.5, 0.0)

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 
+from harness.hydraulics import config as hydraulics_config
 from harness.hydraulics import cylinder as hy
 from harness.hydraulics.servo_controller import (
     StrokeLvdtConfig,
@@ -36,7 +37,7 @@ def _run(velocity_m_s: float, command_N: float, gain: float, *, lvdt: StrokeLvdt
     table = TableMotion(0.01, np.zeros(times.size), np.full(times.size, -velocity_m_s), -velocity_m_s * times)
     true = dataclasses.replace(ACTUATOR, cylinder=dataclasses.replace(
         CYLINDER, valve_flow_m3_per_s=CYLINDER.valve_flow_m3_per_s * true_valve_flow_ratio))
-    params = hy.pack_rig(true, hy.TableConfig(model="motion_source"), IMMOVABLE.base_mass_kg, False, 0.02)
+    params = hy.pack_rig(true, hydraulics_config.TableConfig(model="motion_source"), IMMOVABLE.base_mass_kg, False, 0.02)
     params[hy.ENABLED] = 1.0
     plant = Plant(IMMOVABLE, FRICTIONLESS, table, 1e-7, params)
     plant.reset()

@@ -2,7 +2,7 @@
 
 The design side (the actuator-aware designs and through them the compensators, the
 identification's fit and its bulk modulus) and the plant's own parameters
-(:class:`~harness.hydraulics.cylinder.HydraulicActuatorConfig`) take ``k_h``, ``w_f``, ``K_p``
+(:class:`~harness.hydraulics.config.HydraulicActuatorConfig`) take ``k_h``, ``w_f``, ``K_p``
 and ``(1 - alpha) k_h / w_f`` from there (SPEC 7a, 7a'). These tests fail when a module
 restates one of them: by what it imports, by what its code (docstrings and comments left out)
 computes, and by the numbers it gives on the shipped profiles.
@@ -20,7 +20,8 @@ import pytest
 
 from harness.control.actuator_aware import ActuatorModel
 from harness.hydraulics import linear
-from harness.hydraulics.cylinder import ACTUATOR_GAIN, HydraulicActuatorConfig, TableConfig, pack_rig
+from harness.hydraulics.config import HydraulicActuatorConfig, TableConfig
+from harness.hydraulics.cylinder import ACTUATOR_GAIN, pack_rig
 from harness.identification.actuator_fit import ActuatorParameters, bulk_modulus_Pa
 from harness.profile import load_profile
 from tests.unit.test_architecture import REPO, imported_names
