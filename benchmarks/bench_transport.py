@@ -37,7 +37,7 @@ sys.path.insert(0, str(REPO))
 
 import can  # noqa: E402
 
-from drivers import seqpacket  # noqa: E402
+from drivers.transports import seqpacket  # noqa: E402
 
 seqpacket.register()  # can.Bus(interface="seqpacket") below, with or without the installed entry point
 

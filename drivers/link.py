@@ -4,7 +4,7 @@
 opened (so nothing is ever sent with a refused configuration): load and compile
 the DBC, check its protocol version against the expected one, check the bus load.
 :func:`open_harness` then opens the bus and builds the harness's reader and writer around
-one shared :class:`~drivers.bus.BusHealth`; :func:`open_rig` builds the rig's writer. The rig
+one shared :class:`~drivers.transports.bus.BusHealth`; :func:`open_rig` builds the rig's writer. The rig
 reads frame by frame on its own clock, so it builds its :class:`~drivers.rig_reader.RigReader`
 itself, on the link's bus.
 
@@ -23,11 +23,11 @@ from typing import Any
 
 import can
 
-from drivers.bus import BusHealth, open_bus
-from drivers.busload import BusLoad, check_bus_load
-from drivers.codec import Protocol, check_protocol_version, load_protocol
-from drivers.protocol_values import CURRENT_PROTOCOL_VERSION
+from drivers.protocol.busload import BusLoad, check_bus_load
+from drivers.protocol.codec import Protocol, check_protocol_version, load_protocol
+from drivers.protocol.protocol_values import CURRENT_PROTOCOL_VERSION
 from drivers.reader import HarnessReader
+from drivers.transports.bus import BusHealth, open_bus
 from drivers.writer import HarnessWriter, RigWriter
 
 
@@ -54,7 +54,7 @@ def prepare(
     protocol_version : int
         The ``ProtocolVersion`` the DBC must have.
     dbc_path : str or Path, optional
-        The DBC; None or empty means the packaged ``drivers/rig.dbc`` (``drivers/rig_fd.dbc`` with ``fd``).
+        The DBC; None or empty means the packaged ``drivers/protocol/rig.dbc`` (``drivers/protocol/rig_fd.dbc`` with ``fd``).
     fd : bool
         The CAN FD variant of the protocol: the DBC must describe FD frames, and the bus load counts FD timing.
     data_bitrate_bps : int, optional
@@ -156,7 +156,7 @@ def open_harness(
     Parameters
     ----------
     interface, channel : str
-        The python-can interface and channel (see :func:`drivers.bus.open_bus`).
+        The python-can interface and channel (see :func:`drivers.transports.bus.open_bus`).
     bitrate_bps, rates_hz, max_bus_load, protocol_version, dbc_path, fd, data_bitrate_bps
         As for :func:`prepare`; with ``fd`` the bus is opened for CAN FD frames.
     use_msg_timestamp : bool

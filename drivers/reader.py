@@ -3,10 +3,10 @@
 The loop calls :meth:`FrameReader.poll` once per tick; it drains the bus with
 ``bus.recv(timeout=0)`` (no Notifier thread: a thread adds ~80 us median and milliseconds
 at the tail, benchmarks/README.md, "Timing facts the loop is built on"), decodes every
-frame through the :class:`~drivers.codec.Decoder`, and updates preallocated
+frame through the :class:`~drivers.protocol.codec.Decoder`, and updates preallocated
 :class:`Sample` objects in place. Besides the samples it keeps:
 
-- error-frame and bus-off accounting in a shared :class:`~drivers.bus.BusHealth`;
+- error-frame and bus-off accounting in a shared :class:`~drivers.transports.bus.BusHealth`;
 - frames on "foreign" IDs, by default the actuator command: any such frame that this
   process did not send means another node is commanding the actuator (a pre-arm
   check refuses to arm while :attr:`ReaderCounters.foreign_commands` is non-zero).
@@ -34,16 +34,16 @@ from collections.abc import Sequence
 
 import can
 
-from drivers.bus import BusHealth
-from drivers.codec import MessageCodec, Protocol
-from drivers.decoder import STATUS_OF, Decoder, RxStatus
 from drivers.errors import BusError, ProtocolError
-from drivers.frame_flags import ERROR, EXTENDED, FD, REMOTE, RX, FrameTap, flags_of
-from drivers.frame_kernel import CAPPED, EMPTY, F_FLAGS, F_ID, F_SIZE, F_STATUS, FRAME_COLUMNS, NOT_DECODED
 from drivers.measurements import Measurements
-from drivers.protocol_values import SENSOR_SET_PARTS, DriveState, EstopSource
-from drivers.seqpacket.bus import SeqPacketBus
-from drivers.seqpacket.wire import HEADER
+from drivers.protocol.codec import MessageCodec, Protocol
+from drivers.protocol.datagram import HEADER
+from drivers.protocol.decoder import STATUS_OF, Decoder, RxStatus
+from drivers.protocol.frame_flags import ERROR, EXTENDED, FD, REMOTE, RX, FrameTap, flags_of
+from drivers.protocol.frame_kernel import CAPPED, EMPTY, F_FLAGS, F_ID, F_SIZE, F_STATUS, FRAME_COLUMNS, NOT_DECODED
+from drivers.protocol.protocol_values import SENSOR_SET_PARTS, DriveState, EstopSource
+from drivers.transports.bus import BusHealth
+from drivers.transports.datagram_path import DatagramPath, datagram_path
 
 #: What the harness receives (sensors, actuator status, rig status, E-stop).
 HARNESS_RX = ("TABLE_SENSORS", "BASE_SENSORS", "ACTUATOR_STATUS", "STORY_DRIFTS", "FLOOR_ACCELS", "RIG_STATUS", "ESTOP")
@@ -52,7 +52,7 @@ HARNESS_RX_FD = (*HARNESS_RX, "SENSOR_SET")
 #: What the rig (servo controller and virtual rig) receives (:class:`drivers.rig_reader.RigReader`).
 RIG_RX = ("ACTUATOR_CMD", "HEARTBEAT", "RIG_CONTROL", "ESTOP", "DRIVE_RESET")
 ESTOP_MESSAGE = "ESTOP"
-#: ESTOP ``source`` of the operator panel (the DBC's value table, :class:`~drivers.protocol_values.EstopSource`).
+#: ESTOP ``source`` of the operator panel (the DBC's value table, :class:`~drivers.protocol.protocol_values.EstopSource`).
 PANEL_SOURCE = EstopSource.PANEL
 #: How far in the future a frame's timestamp may lie before it is taken for another clock (s).
 FUTURE_TOLERANCE_S = 0.001
@@ -182,7 +182,7 @@ class FrameReader:
     Parameters
     ----------
     bus : can.BusABC
-        An open bus (see :func:`drivers.bus.open_bus`).
+        An open bus (see :func:`drivers.transports.bus.open_bus`).
     protocol : Protocol
         The compiled DBC.
     names : sequence of str
@@ -224,10 +224,11 @@ class FrameReader:
         self.max_frames = max_frames
         self.estop_requested = False
         #: Called with every received frame (valid or not) before it is decoded, e.g. the
-        #: run recorder's CAN log (:data:`~drivers.frame_flags.FrameTap`; it must copy the data it keeps).
+        #: run recorder's CAN log (:data:`~drivers.protocol.frame_flags.FrameTap`; it must copy the data it keeps).
         self.tap: FrameTap | None = None
-        #: The bus again when it hands over raw datagrams (``seqpacket``): :meth:`poll` then builds no Message.
-        self._datagrams = bus if isinstance(bus, SeqPacketBus) else None
+        #: The bus again when it offers the datagram path (:class:`~drivers.transports.datagram_path.DatagramPath`,
+        #: e.g. ``seqpacket``): :meth:`poll` then builds no Message.
+        self._datagrams = datagram_path(bus)
         self._samples = {
             protocol[n].frame_id: Sample(n, self.decoder.values(n), {s: i for i, s in enumerate(protocol[n].signal_names)})
             for n in names
@@ -379,13 +380,14 @@ class FrameReader:
             self.counters.polls_capped += 1
         return handled
 
-    def _poll_datagrams(self, bus: SeqPacketBus, now: float) -> int:
-        """:meth:`poll` straight from a ``seqpacket`` bus's datagrams, with no :class:`can.Message` (the tick's path).
+    def _poll_datagrams(self, bus: DatagramPath, now: float) -> int:
+        """:meth:`poll` straight from the datagrams of a bus that offers the datagram path, with no :class:`can.Message`.
 
+        The tick's path on a ``seqpacket`` bus (:class:`~drivers.transports.datagram_path.DatagramPath`).
         The same frames in the same order as :meth:`_poll_messages` (the bus has no filters and no
-        local echo, :attr:`~drivers.seqpacket.bus.SeqPacketBus.raw_receive_ok`). With one peer they
+        local echo, :attr:`~drivers.transports.datagram_path.DatagramPath.raw_receive_ok`). With one peer they
         are taken off its socket and checked and decoded in one compiled call
-        (:meth:`~drivers.decoder.Decoder.receive_datagrams`); a hub relaying between peers takes
+        (:meth:`~drivers.protocol.decoder.Decoder.receive_datagrams`); a hub relaying between peers takes
         them through the bus (:meth:`_receive_each`). Then each is accounted, in order, as
         :meth:`_handle` accounts a frame, stamped with the wall clock once for the poll (the frames
         of one poll arrived within its microseconds).
@@ -420,9 +422,10 @@ class FrameReader:
             self._account(frame_id, flags & EXTENDED, STATUS_OF[status], data, t)
         return frames
 
-    def _receive_each(self, bus: SeqPacketBus, start: int) -> int:
-        """Fill ``self._batch`` from row ``start`` on through the bus's :meth:`~drivers.seqpacket.bus.SeqPacketBus.recv_datagram`
-        (a hub relaying between peers, or after the compiled receive ended unusually), then decode those rows."""
+    def _receive_each(self, bus: DatagramPath, start: int) -> int:
+        """Fill ``self._batch`` from row ``start`` on through the bus's
+        :meth:`~drivers.transports.datagram_path.DatagramPath.recv_datagram` (a hub relaying between peers,
+        or after the compiled receive ended unusually), then decode those rows."""
         batch = self._batch
         rows, ints = batch.rows, batch.frame_ints
         recv = bus.recv_datagram
@@ -456,7 +459,7 @@ class FrameReader:
         return now - max(delay, 0.0)
 
     def _handle(self, frame_id: int, flags: int, data: bytes | bytearray | memoryview, t: float) -> None:
-        """Check, decode and account one received frame (``flags`` of :mod:`drivers.frame_flags`) seen at ``t``."""
+        """Check, decode and account one received frame (``flags`` of :mod:`drivers.protocol.frame_flags`) seen at ``t``."""
         if flags & ERROR or (frame_id in self._foreign_ids and not flags & EXTENDED):
             self._handle_undecoded(frame_id, flags, data, t)
             return
@@ -554,7 +557,10 @@ class HarnessReader(FrameReader):
 
     @property
     def drive_state(self) -> int:
-        """Latest ACTUATOR_STATUS drive state, a :class:`~drivers.protocol_values.DriveState` value (``OFF`` before any frame)."""
+        """Latest ACTUATOR_STATUS drive state, a :class:`~drivers.protocol.protocol_values.DriveState` value.
+
+        ``OFF`` before any frame.
+        """
         return int(self.status.values[self._drive])
 
     @property
@@ -574,7 +580,7 @@ class HarnessReader(FrameReader):
 
     @property
     def fault_code(self) -> int:
-        """Latest servo fault code, a :class:`~drivers.protocol_values.FaultCode` value or any injected code (0 none)."""
+        """Latest servo fault code, a :class:`~drivers.protocol.protocol_values.FaultCode` value or any injected code (0 none)."""
         return int(self.status.values[self._fault])
 
     @property

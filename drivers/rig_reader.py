@@ -5,7 +5,7 @@ message, which is right for a control loop but loses events for the rig: in lock
 ACTUATOR_CMD frame is a step, and two RIG_CONTROL frames in one poll are two commands.
 :class:`RigReader` therefore takes frames off the bus one by one (blocking up to a timeout
 when asked, so the lockstep thread does not spin) and checks and decodes each with the
-:class:`~drivers.decoder.Decoder` (same E2E checks and counts). A frame on the E-stop ID
+:class:`~drivers.protocol.decoder.Decoder` (same E2E checks and counts). A frame on the E-stop ID
 asks for a stop by the same fail-safe rule as the harness's reader
 (:func:`drivers.reader.estop_frame_active`): too damaged to read, or intact and active even
 with a repeated or skipped counter.
@@ -26,9 +26,9 @@ from collections.abc import Callable
 
 import can
 
-from drivers.codec import Protocol
-from drivers.decoder import Decoder, RxStatus
 from drivers.errors import BusError
+from drivers.protocol.codec import Protocol
+from drivers.protocol.decoder import Decoder, RxStatus
 from drivers.reader import RIG_RX, estop_frame_active
 
 #: A message silent this long (s) comes from a new sender: its counter history is forgotten.

@@ -2,15 +2,16 @@
 
 Each message a node sends has one :class:`TxFrame`: a ``can.Message`` built at
 configure time whose ``data`` bytearray is overwritten in place on every send, and
-the message's rolling counter. On a ``seqpacket`` bus the frame is encoded instead into
-its preallocated datagram (:mod:`drivers.seqpacket.wire`, header written once) and handed
-to :meth:`~drivers.seqpacket.bus.SeqPacketBus.send_datagram`: the same bytes on the wire
-without python-can's per-message path. The counter advances only when ``bus.send``
+the message's rolling counter. On a bus that offers the datagram path
+(:class:`~drivers.transports.datagram_path.DatagramPath`, e.g. ``seqpacket``) the frame is encoded
+instead into its preallocated datagram (:mod:`drivers.protocol.datagram`, header written once) and
+handed to its :meth:`~drivers.transports.datagram_path.DatagramPath.send_datagram`: the same bytes on
+the wire without python-can's per-message path. The counter advances only when ``bus.send``
 succeeded, so a frame the bus refused leaves no gap for the receiver to count.
 
 ``send`` never blocks (``timeout=0``) and never raises on a bus failure: a full
 transmit queue (``ENOBUFS``, "No buffer space available") or another send error
-is counted in the shared :class:`~drivers.bus.BusHealth` and reported by the
+is counted in the shared :class:`~drivers.transports.bus.BusHealth` and reported by the
 return value, so the tick decides what to do (the supervisor trips on it).
 """
 
@@ -21,14 +22,14 @@ from collections.abc import Sequence
 
 import can
 
-from drivers.bus import BusHealth
-from drivers.codec import MessageCodec, Protocol
-from drivers.e2e import COUNTER_MODULO
 from drivers.errors import ProtocolError
-from drivers.frame_flags import FrameTap, flags_of
-from drivers.protocol_values import EstopSource
-from drivers.seqpacket.bus import SeqPacketBus
-from drivers.seqpacket.wire import HEADER
+from drivers.protocol.codec import MessageCodec, Protocol
+from drivers.protocol.datagram import HEADER
+from drivers.protocol.e2e import COUNTER_MODULO
+from drivers.protocol.frame_flags import FrameTap, flags_of
+from drivers.protocol.protocol_values import EstopSource
+from drivers.transports.bus import BusHealth
+from drivers.transports.datagram_path import datagram_path
 
 #: What the harness sends.
 HARNESS_TX = ("ACTUATOR_CMD", "HEARTBEAT", "ESTOP", "RIG_CONTROL", "DRIVE_RESET")
@@ -53,9 +54,9 @@ class TxFrame:
     sent : int
         Frames sent successfully.
     flags : int
-        Its kind (:mod:`drivers.frame_flags`).
+        Its kind (:mod:`drivers.protocol.frame_flags`).
     datagram : bytearray
-        The frame in the ``seqpacket`` wire format (header written here, data rewritten in place).
+        The frame in the datagram layout (:mod:`drivers.protocol.datagram`; header written here, data rewritten in place).
     payload : memoryview
         The data field of :attr:`datagram`.
     """
@@ -106,10 +107,11 @@ class FrameWriter:
             tx.msg.channel = channel if isinstance(channel, (str, int)) else None
         self._channel = channel if isinstance(channel, (str, int)) else None
         #: Called with every frame the bus took, e.g. the run recorder's CAN log
-        #: (:data:`~drivers.frame_flags.FrameTap`; the data is rewritten by the next send: copy it).
+        #: (:data:`~drivers.protocol.frame_flags.FrameTap`; the data is rewritten by the next send: copy it).
         self.tap: FrameTap | None = None
-        #: The bus again when it takes datagrams (``seqpacket``): frames are then sent without a Message.
-        self._datagrams = bus if isinstance(bus, SeqPacketBus) else None
+        #: The bus again when it offers the datagram path (:class:`~drivers.transports.datagram_path.DatagramPath`,
+        #: e.g. ``seqpacket``): frames are then sent without a Message.
+        self._datagrams = datagram_path(bus)
 
     def frame(self, name: str) -> TxFrame:
         """The :class:`TxFrame` of message ``name``."""
@@ -188,13 +190,17 @@ class HarnessWriter(FrameWriter):
         return self.send_frame(self._hb, self._hb_values, now)
 
     def estop(self, active: bool, now: float, source: int = EstopSource.HARNESS, reason: int = 0) -> bool:
-        """Send ESTOP (``source`` an :class:`~drivers.protocol_values.EstopSource`, ``reason`` 0..255); repeat while active."""
+        """Send ESTOP (``source`` an :class:`~drivers.protocol.protocol_values.EstopSource`, ``reason`` 0..255).
+
+        Repeat while active.
+        """
         values = self._estop_values
         values[0], values[1], values[2] = (1.0 if active else 0.0), source, reason
         return self.send_frame(self._estop, values, now)
 
     def rig_control(self, command: int, lockstep: bool, now: float, fault_id: int = 0, fault_param: float = 0.0) -> bool:
-        """Send RIG_CONTROL: ``command`` a :class:`~drivers.protocol_values.RigCommand`, the lockstep flag, fault injection."""
+        """Send RIG_CONTROL: ``command`` a :class:`~drivers.protocol.protocol_values.RigCommand`, the lockstep flag,
+        fault injection."""
         values = self._ctrl_values
         values[0], values[1], values[2], values[3] = command, (1.0 if lockstep else 0.0), fault_id, fault_param
         return self.send_frame(self._ctrl, values, now)
@@ -203,7 +209,7 @@ class HarnessWriter(FrameWriter):
         """Send DRIVE_RESET: the operator's reset of the drive's latched fault ``fault_code`` (0..255).
 
         Send it once, before arming (never from the tick): the drive clears only a reset-able
-        latched fault whose code is ``fault_code`` (``drivers/PROTOCOL.md``).
+        latched fault whose code is ``fault_code`` (``drivers/protocol/PROTOCOL.md``).
         """
         self._reset_values[0] = fault_code
         return self.send_frame(self._reset, self._reset_values, now)
@@ -259,8 +265,8 @@ class RigWriter(FrameWriter):
         return self._send3(self._estop, 1.0 if active else 0.0, source, reason, now)
 
     def actuator_status(self, force_n: float, drive_state: int, pressure_ok: bool, fault_code: int, now: float) -> bool:
-        """Send ACTUATOR_STATUS: ``drive_state`` (:class:`~drivers.protocol_values.DriveState`), pressure ok,
-        ``fault_code`` (:class:`~drivers.protocol_values.FaultCode` or an injected code), force (N)."""
+        """Send ACTUATOR_STATUS: ``drive_state`` (:class:`~drivers.protocol.protocol_values.DriveState`), pressure ok,
+        ``fault_code`` (:class:`~drivers.protocol.protocol_values.FaultCode` or an injected code), force (N)."""
         values = self._v4
         values[0], values[1], values[2], values[3] = drive_state, (1.0 if pressure_ok else 0.0), fault_code, force_n
         return self.send_frame(self._status, values, now)

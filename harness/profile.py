@@ -418,7 +418,7 @@ def _build_checked(data: dict, source: str) -> Profile:
 
 def _force_ceilings(profile: Profile) -> list[tuple[float, str]]:
     """(largest allowed max_force_N in N, why) for the protocol and each actuator rating the profile declares."""
-    dbc = profile.can.dbc_path or "drivers/rig.dbc"
+    dbc = profile.can.dbc_path or "drivers/protocol/rig.dbc"
     ceilings = [
         (command_force_limit_N(profile.can.dbc_path), f"the range of the ACTUATOR_CMD force signal of {dbc}"),
         (profile.rig.actuator.force_limit_N, "rig.actuator.force_limit_N, the virtual rig actuator's rating"),
@@ -436,14 +436,14 @@ def command_force_limit_N(dbc_path: str = "") -> float:
     Parameters
     ----------
     dbc_path : str
-        The DBC (``can.dbc_path``); empty means the packaged ``drivers/rig.dbc``.
+        The DBC (``can.dbc_path``); empty means the packaged ``drivers/protocol/rig.dbc``.
 
     Raises
     ------
     ProtocolError
         If the DBC cannot be read or has no such message or signal.
     """
-    from drivers.codec import load_protocol
+    from drivers.protocol.codec import load_protocol
 
     codec = load_protocol(dbc_path or None)["ACTUATOR_CMD"]
     signal = codec.signals[codec.index("force")]

@@ -2,7 +2,7 @@
 
 mutmut forks each mutant's test run from a process that has imported the project with no
 mutant active, and maps each function to the tests that called it. Code that runs only while
-a module is imported (the CRC table in drivers/e2e.py, the safety table, the trip-action
+a module is imported (the CRC table in drivers/protocol/e2e.py, the safety table, the trip-action
 defaults) is therefore never run with its mutant active, and mutmut's map gives it only the
 first test of the session (the one running when the imports happened). Its survivors are run
 again here, each in a fresh interpreter over the whole test selection of ``[tool.mutmut]``,

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
-from drivers.seqpacket.bus import SeqPacketBus
+from drivers.transports.seqpacket.bus import SeqPacketBus
 from tests import realtime_runs
 
 # No hypothesis deadline: how long an example takes is not what these tests judge (speed targets are in benchmarks/),

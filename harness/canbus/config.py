@@ -1,9 +1,9 @@
 """The ``can:`` section of a profile: interface, channel, bitrate, protocol version and message rates.
 
 Defaults fit 500 Hz control on a 1 Mbit/s bus with about 30 % load (see
-:mod:`drivers.busload`). ``fd: true`` selects the CAN FD variant of the protocol
-(``drivers/rig_fd.dbc``): every frame an FD frame with bit-rate switching, the whole sensor set in
-one SENSOR_SET frame. Every periodic message of ``drivers/rig.dbc`` takes its rate from one
+:mod:`drivers.protocol.busload`). ``fd: true`` selects the CAN FD variant of the protocol
+(``drivers/protocol/rig_fd.dbc``): every frame an FD frame with bit-rate switching, the whole sensor set in
+one SENSOR_SET frame. Every periodic message of ``drivers/protocol/rig.dbc`` takes its rate from one
 field here (:data:`RATE_FIELDS`); event messages (E-stop, rig
 control, drive reset) are budgeted at the rate they may burst at.
 
@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from drivers.protocol_values import CURRENT_PROTOCOL_VERSION, SENSOR_SET_PARTS
+from drivers.protocol.protocol_values import CURRENT_PROTOCOL_VERSION, SENSOR_SET_PARTS
 from harness.config.input_limits import DEFAULT_RATE_HZ
 from harness.config.schema import internal, quantity
 
@@ -36,7 +36,7 @@ RATE_FIELDS: dict[str, str] = {
     "DRIVE_RESET": "rig_control_rate_hz",  # one frame before arming; budgeted as the other harness event message
 }
 
-#: The CAN FD protocol (``can.fd: true``, ``drivers/rig_fd.dbc``): SENSOR_SET carries the whole sensor
+#: The CAN FD protocol (``can.fd: true``, ``drivers/protocol/rig_fd.dbc``): SENSOR_SET carries the whole sensor
 #: set at the sensor rate, in place of the four classic sensor messages (``SENSOR_SET_PARTS``), which
 #: are then not sent (0 Hz).
 FD_RATE_FIELDS: dict[str, str] = {"SENSOR_SET": "sensor_frame_rate_hz"}
@@ -60,14 +60,14 @@ class CanConfig:
         Nominal bitrate (bit/s): the whole classic frame, the arbitration phase of an FD frame.
         socketcan takes it from ``ip link``; it still sets the bus-load budget.
     fd : bool
-        Use the CAN FD variant of the protocol (``drivers/rig_fd.dbc``). False, the default, keeps
+        Use the CAN FD variant of the protocol (``drivers/protocol/rig_fd.dbc``). False, the default, keeps
         classic CAN, which every CAN controller speaks; a bus with a classic-only node must stay classic.
     data_bitrate_bps : int
         Data-phase bitrate of FD frames (bit/s; ignored for classic CAN). 5 Mbit/s by default:
         the highest data rate ISO 11898-2:2016 specifies transceiver timing for, so common CAN FD
         transceivers and adapters run it; the data phase of a 32-byte sensor set (358 bits worst
         case) then takes 72 us, and 2 kHz control loads the bus 33.5 % (worst case,
-        :mod:`drivers.busload`), inside the default ``max_bus_load`` of 50 % with room for error
+        :mod:`drivers.protocol.busload`), inside the default ``max_bus_load`` of 50 % with room for error
         frames and retransmissions. 2 Mbit/s would load it 60.7 % at 2 kHz (refused; 32.4 % at
         1 kHz), 4 Mbit/s 38.1 %. The data phase has no arbitration, so the cable's round trip does
         not bound it as it bounds the nominal rate; a short, terminated lab bus (the harness's
@@ -97,7 +97,7 @@ class CanConfig:
     max_frames_per_poll : int
         Upper bound of frames one ``poll`` handles, so a flooded bus cannot stall a tick.
     dbc_path : str
-        DBC file; empty means the packaged ``drivers/rig.dbc``.
+        DBC file; empty means the packaged ``drivers/protocol/rig.dbc``.
     peer_group : str
         ``seqpacket`` interface only: a group whose members may join the channel besides this
         user (checked on every connection with the peer's kernel credentials; docs/SAFETY.md,
@@ -107,7 +107,7 @@ class CanConfig:
     interface: str = quantity("virtual", doc="python-can interface (virtual, socketcan, pcan, kvaser, ...)")
     channel: str = quantity("harness", doc="interface channel, e.g. vcan0, can0, PCAN_USBBUS1")
     bitrate_bps: int = quantity(1_000_000, gt=0, le=1_000_000, doc="CAN bitrate (classic CAN; the nominal rate of CAN FD)")
-    fd: bool = quantity(False, doc="CAN FD variant of the protocol (drivers/rig_fd.dbc): true or false")
+    fd: bool = quantity(False, doc="CAN FD variant of the protocol (drivers/protocol/rig_fd.dbc): true or false")
     data_bitrate_bps: int = quantity(5_000_000, gt=0, le=8_000_000, doc="CAN FD data-phase bitrate (bit/s)")
     max_bus_load: float = quantity(0.5, gt=0.0, le=1.0, doc="largest allowed share of the bitrate")
     protocol_version: int = quantity(CURRENT_PROTOCOL_VERSION, ge=0, doc="ProtocolVersion the profile expects of the DBC")
@@ -128,7 +128,7 @@ class CanConfig:
     )
     timestamp_source: Literal["poll", "message"] = quantity("poll", doc="receive time: poll's now, or msg.timestamp")
     max_frames_per_poll: int = quantity(256, gt=0, doc="frames one poll handles at most")
-    dbc_path: str = quantity("", doc="DBC file; empty = packaged drivers/rig.dbc")
+    dbc_path: str = quantity("", doc="DBC file; empty = packaged drivers/protocol/rig.dbc")
     peer_group: str = quantity("", doc="seqpacket: a group whose members may join besides this user; empty = this user only")
     loop_rate_hz: float = internal(
         DEFAULT_RATE_HZ, doc="the loop's tick rate, control.rate_hz: filled in by the profile, never set in one",

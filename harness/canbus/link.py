@@ -12,9 +12,9 @@ from collections.abc import Collection
 from typing import Any
 
 from drivers import link
-from drivers.busload import BusLoad
-from drivers.codec import Protocol
 from drivers.link import HarnessLink, RigLink
+from drivers.protocol.busload import BusLoad
+from drivers.protocol.codec import Protocol
 from harness.canbus.config import CanConfig
 
 
@@ -29,7 +29,7 @@ def protocol_arguments(config: CanConfig) -> dict[str, Any]:
     }
 
 
-#: The python-can interface whose bus checks its peers' credentials (drivers/seqpacket/).
+#: The python-can interface whose bus checks its peers' credentials (drivers/transports/seqpacket/).
 PEER_CHECKED_INTERFACE = "seqpacket"
 
 

@@ -25,7 +25,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from drivers.protocol_values import FaultCode
+from drivers.protocol.protocol_values import FaultCode
 from harness.loop.status import TABLE_VERDICT_NAMES, LoopStatus
 from harness.paths import PROJECT_ROOT
 from harness.signals.timing_counts import TimingCounts, stall_words

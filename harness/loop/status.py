@@ -52,7 +52,9 @@ class LoopStatus(StatusBlock):
     gaps_past_budget = IntField("gaps between two ticks' starts longer than the stall budget, in any phase (each an event)")
     longest_stall_s = FloatField("longest time between the starts of two consecutive ticks in a stall (s)")
     missed_periods = IntField("missed periods in total: the sum of the overrun column (harness.signals.timing_counts)")
-    fault_code = IntField("the servo's fault code in the latest ACTUATOR_STATUS (drivers.protocol_values.FaultCode); 0 none")
+    fault_code = IntField(
+        "the servo's fault code in the latest ACTUATOR_STATUS (drivers.protocol.protocol_values.FaultCode); 0 none"
+    )
     n_stories = IntField("stories whose drift and floor acceleration are published (set_story); 0 none")
     table_verdict = IntField("the table against its record: a code of TABLE_VERDICT_NAMES")
     table_correlation = FloatField("the table check's latest correlation (NaN before its first evaluation)")

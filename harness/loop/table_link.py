@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from drivers.protocol_values import RigCommand
+from drivers.protocol.protocol_values import RigCommand
 
 if TYPE_CHECKING:
     from drivers.link import HarnessLink

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from drivers.protocol_values import EstopSource
+from drivers.protocol.protocol_values import EstopSource
 from harness.safety.checks import CHECK_NAMES
 from harness.safety.config import TripActionsConfig
 from harness.safety.lifecycle import State

@@ -20,7 +20,7 @@ from typing import Any
 import can
 import numpy as np
 
-from drivers.frame_flags import RX, flags_of, message_of
+from drivers.protocol.frame_flags import RX, flags_of, message_of
 from harness.errors import HarnessError
 from harness.realtime.memory import float_view, prefaulted_zeros
 
@@ -174,7 +174,7 @@ class FrameRing:
     ) -> bool:
         """Copy one frame in from its fields; never blocks. False if full (dropped and counted).
 
-        A reader's and a writer's tap (:data:`drivers.frame_flags.FrameTap`) on the recorder's CAN log.
+        A reader's and a writer's tap (:data:`drivers.protocol.frame_flags.FrameTap`) on the recorder's CAN log.
 
         Parameters
         ----------
@@ -183,7 +183,7 @@ class FrameRing:
         frame_id : int
             Arbitration ID.
         flags : int
-            Its kind and direction (:mod:`drivers.frame_flags`, :data:`~drivers.frame_flags.RX` for received).
+            Its kind and direction (:mod:`drivers.protocol.frame_flags`, :data:`~drivers.protocol.frame_flags.RX` for received).
         data : bytes-like
             The data field (at most 64 bytes); copied.
         channel : optional

@@ -30,7 +30,7 @@ from typing import Any
 import can
 import numpy as np
 
-from drivers.frame_flags import FrameTap
+from drivers.protocol.frame_flags import FrameTap
 from harness.recording.layout import (
     CAN_FILE,
     EVENTS_FILE,
@@ -281,7 +281,7 @@ class RunFolder:
         """The taps a link's reader and writer call with every frame: ``(received, sent)``.
 
         Both queue the frame straight into the recorder's ring with the direction its flags give
-        (:data:`drivers.frame_flags.RX` set by the side that saw the frame: SocketCAN marks frames
+        (:data:`drivers.protocol.frame_flags.RX` set by the side that saw the frame: SocketCAN marks frames
         from other processes of the same host ``is_rx=False``) and the wall-clock time the side
         gives (the writer stamps sent frames when they go out; the reader keeps the bus's timestamp).
         """

@@ -2,7 +2,7 @@
 
 Each line is one frame the harness received (``R``) or sent (``T``), in the order its reader
 handled them and its writer sent them. A frame read back carries the attributes the harness's
-reader takes from a :class:`can.Message` (:func:`drivers.frame_flags.flags_of`), so the replay's
+reader takes from a :class:`can.Message` (:func:`drivers.protocol.frame_flags.flags_of`), so the replay's
 bus hands it to the reader as it is, without building a Message.
 """
 

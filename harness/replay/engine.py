@@ -253,7 +253,7 @@ def _continue_counters(writer: Any, recorded: RecordedRun, protocol: Any) -> Non
     A counter advances only on a send the bus took, and only those reach ``can.log``: the frames of
     each message sent before the loop, modulo the counter's range, are where it stood.
     """
-    from drivers.e2e import COUNTER_MODULO
+    from drivers.protocol.e2e import COUNTER_MODULO
 
     sent: dict[int, int] = {}
     for frame in recorded.frames[: recorded.loop_start_frame]:

@@ -3,7 +3,7 @@
 ``signals.csv`` records the drive state (FAULT is 3) but not the servo's fault code, and a
 ``drive_fault`` trip's detail says only that the drive reports a fault. The code travels in
 every ACTUATOR_STATUS frame, which ``can.log`` keeps: :func:`drive_faults` reads it back and
-names each code by :class:`drivers.protocol_values.FaultCode` (the DBC's value table).
+names each code by :class:`drivers.protocol.protocol_values.FaultCode` (the DBC's value table).
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from drivers.codec import MessageCodec, load_protocol
-from drivers.protocol_values import DriveState, FaultCode
+from drivers.protocol.codec import MessageCodec, load_protocol
+from drivers.protocol.protocol_values import DriveState, FaultCode
 from harness.errors import EXPECTED_ERRORS
 from harness.recording.reader import RunData
 

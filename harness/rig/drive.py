@@ -1,8 +1,8 @@
 """Drive enable logic and the drive-side watchdog of the servo controller.
 
 States and fault codes are the DBC's value tables of ACTUATOR_STATUS ``drive_state``
-(:class:`~drivers.protocol_values.DriveState`: OFF, READY, ENABLED, FAULT, ESTOP) and
-``fault_code`` (:class:`~drivers.protocol_values.FaultCode`).
+(:class:`~drivers.protocol.protocol_values.DriveState`: OFF, READY, ENABLED, FAULT, ESTOP) and
+``fault_code`` (:class:`~drivers.protocol.protocol_values.FaultCode`).
 
 - OFF -> READY when heartbeats arrive (the latest younger than the watchdog
   timeout) and the hydraulic pressure is ok.
@@ -15,7 +15,7 @@ States and fault codes are the DBC's value tables of ACTUATOR_STATUS ``drive_sta
 - any -> ESTOP (latched, code ESTOP) on an E-stop.
 - FAULT and ESTOP clear on the operator's reset (:meth:`Drive.request_reset`, a DRIVE_RESET
   frame), back to OFF, when the latched code is reset-able
-  (:data:`~drivers.protocol_values.RESETTABLE_FAULTS`), its cause is gone and the frame names
+  (:data:`~drivers.protocol.protocol_values.RESETTABLE_FAULTS`), its cause is gone and the frame names
   it; otherwise the reset is refused, the drive stays latched and its fault code names the
   condition still present. :meth:`Drive.reset` (RIG_CONTROL reset: the virtual rig's power
   cycle) clears any latch.
@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 from enum import Enum
 
-from drivers.protocol_values import RESETTABLE_FAULTS, DriveState, FaultCode, fault_name
+from drivers.protocol.protocol_values import RESETTABLE_FAULTS, DriveState, FaultCode, fault_name
 from harness.safety.lifecycle import State
 
 _LATCHED = (DriveState.FAULT, DriveState.ESTOP)

@@ -15,7 +15,7 @@ from collections import deque
 from collections.abc import Callable
 from enum import IntEnum
 
-from drivers.protocol_values import DriveState, FaultCode, fault_name
+from drivers.protocol.protocol_values import DriveState, FaultCode, fault_name
 from harness.safety.lifecycle import State
 
 #: Lines kept when nobody drains the journal.

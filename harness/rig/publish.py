@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import can
 
-from drivers.e2e import COUNTER_MODULO
-from drivers.protocol_values import SENSOR_SET_PARTS, EstopSource
+from drivers.protocol.e2e import COUNTER_MODULO
+from drivers.protocol.protocol_values import SENSOR_SET_PARTS, EstopSource
 from drivers.writer import RigWriter, TxFrame
 from harness.rig.faults import (
     BUS_SILENCE,

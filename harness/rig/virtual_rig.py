@@ -30,8 +30,8 @@ import can
 import numpy as np
 
 from drivers import rig_reader
-from drivers.codec import load_protocol
-from drivers.protocol_values import DriveState, FaultCode, RigCommand
+from drivers.protocol.codec import load_protocol
+from drivers.protocol.protocol_values import DriveState, FaultCode, RigCommand
 from drivers.rig_reader import RigReader
 from drivers.writer import RigWriter
 from harness.canbus.config import CanConfig

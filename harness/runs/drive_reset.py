@@ -9,7 +9,7 @@ after the bus is open and before anything is armed:
 1. wait for the drive's ACTUATOR_STATUS (and a panel period, to hear a pressed E-stop);
 2. no latched fault: nothing is sent;
 3. refuse (:class:`DriveResetRefused`, exit status 2, nothing sent) when the latched fault is
-   not one a reset may clear (:data:`~drivers.protocol_values.RESETTABLE_FAULTS`), an E-stop
+   not one a reset may clear (:data:`~drivers.protocol.protocol_values.RESETTABLE_FAULTS`), an E-stop
    is asserted, or the pressure is still lost;
 4. send a DRIVE_RESET naming the latched code and wait for the drive to leave its latch (up to
    :data:`ATTEMPTS` frames, in case the first is rejected for its rolling counter); a drive that
@@ -27,7 +27,7 @@ import time
 from dataclasses import dataclass
 
 from drivers.link import HarnessLink
-from drivers.protocol_values import RESETTABLE_FAULTS, DriveState, FaultCode, fault_name
+from drivers.protocol.protocol_values import RESETTABLE_FAULTS, DriveState, FaultCode, fault_name
 from harness.errors import SafetyError
 
 #: Longest wait for the drive's first ACTUATOR_STATUS (s).

@@ -3,7 +3,7 @@
 By default the rig runs as a separate ``harness rig`` process, as on a real channel
 (``socketcan``/``vcan0``): the loop's process then holds nothing but the loop, so no other
 thread takes the interpreter lock from it. The default bus is the ``seqpacket`` interface
-(drivers/seqpacket/), a Unix-socket bus private to this dry run that needs no set-up.
+(drivers/transports/seqpacket/), a Unix-socket bus private to this dry run that needs no set-up.
 The command starts the rig unless ``--external-rig`` says one is already running. On
 python-can's in-process ``virtual`` bus (``--interface virtual``) the rig runs in a thread
 of this process instead (fine in lockstep; in real time it competes with the loop). Afterwards the
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from drivers.link import HarnessLink
-from drivers.protocol_values import RigCommand
+from drivers.protocol.protocol_values import RigCommand
 from drivers.reader import Sample
 from harness.canbus.config import CanConfig
 from harness.control.factory import make_controller
@@ -55,7 +55,7 @@ from harness.signals.peaks import Peaks
 from harness.simulation.case import CaseResult, SamplingSettings, run_case
 from harness.simulation.twin import run_rig_twin
 
-#: The python-can interface (drivers/seqpacket/) of the default dry run: the rig runs in its own
+#: The python-can interface (drivers/transports/seqpacket/) of the default dry run: the rig runs in its own
 #: process, on a Unix-socket bus that needs no set-up.
 PRIVATE_BUS_INTERFACE = "seqpacket"
 RIG_APPEAR_TIMEOUT_S = 60.0
@@ -354,7 +354,7 @@ def private_bus(can: CanConfig, external_rig: bool, suffix: str = "") -> CanConf
 
     Two dry runs at once (or a test suite) then never meet on one ``seqpacket`` channel. The name
     carries random bytes, so nobody can bind it before this run (a plain name is a socket in this
-    user's private directory, which no other user can write: drivers/seqpacket/channel.py); the rig
+    user's private directory, which no other user can write: drivers/transports/seqpacket/channel.py); the rig
     process is handed it, and each end admits only the other's process (:func:`_rig_process`,
     ``SessionSettings.peer_pids``).
     """

@@ -4,7 +4,7 @@
 profile the dry run resolved (:meth:`harness.profile.Profile.resolved_data`), the CAN
 interface and channel, ``lockstep`` and ``parent_pid``. It parses no command-line
 options, so the rig always serves the very profile the loop runs. On a ``seqpacket`` channel
-it admits only ``parent_pid`` at the other end (:mod:`drivers.seqpacket.peers`): the dry run
+it admits only ``parent_pid`` at the other end (:mod:`drivers.transports.seqpacket.peers`): the dry run
 made the channel's name and hands it over here, and a hub or relay that another process put on
 it is refused. It serves until
 SIGINT, or until the dry run's process is gone; a problem goes to standard error, which

@@ -160,7 +160,7 @@ def expected_run_size(profile: Profile, settings: SessionSettings) -> RunSize:
 
 def bus_statistics(link) -> dict:
     """Frames received, rejected by kind, sent, and the bus's error counters (for metadata and benchmarks)."""
-    from drivers.decoder import RxStatus
+    from drivers.protocol.decoder import RxStatus
 
     reader, health = link.reader, link.reader.health
     counts = reader.decoder.counts

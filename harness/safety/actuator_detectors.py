@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from drivers.protocol_values import fault_name
+from drivers.protocol.protocol_values import fault_name
 from harness.hydraulics.servo_controller import steady_bleed_N
 from harness.safety.comms_detectors import FlagDetector
 from harness.safety.config import ActuatorConfig, ForceConfig

@@ -41,7 +41,7 @@ class TickHealth:
     drive_ready, drive_fault, pressure_ok : bool
         From the newest actuator status frame.
     drive_fault_code : int
-        The fault code of the newest actuator status frame (:class:`drivers.protocol_values.FaultCode`;
+        The fault code of the newest actuator status frame (:class:`drivers.protocol.protocol_values.FaultCode`;
         0 none): why the drive faulted, e.g. its heartbeat watchdog.
     actuator_status_age_s : float
         Age of the newest actuator status frame (s).

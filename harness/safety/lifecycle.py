@@ -30,7 +30,7 @@ from harness.errors import SafetyError
 
 
 class State(IntEnum):
-    """Run states; sent in HEARTBEAT ``state``, whose value table in ``drivers/rig.dbc`` names them alike."""
+    """Run states; sent in HEARTBEAT ``state``, whose value table in ``drivers/protocol/rig.dbc`` names them alike."""
 
     IDLE = 0
     ARMED = 1

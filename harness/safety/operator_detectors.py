@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from drivers.protocol_values import fault_name
+from drivers.protocol.protocol_values import fault_name
 from harness.safety.comms_detectors import FlagDetector
 from harness.safety.config import EStopConfig, RunConfig
 from harness.safety.detector_base import Detector

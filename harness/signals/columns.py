@@ -33,7 +33,7 @@ from __future__ import annotations
 from typing import Final
 
 #: Stories the CAN protocol's story messages carry (STORY_DRIFTS: drift_1..3, FLOOR_ACCELS:
-#: accel_1..3 in drivers/rig.dbc): the loop's row, the rig and its twin have this many.
+#: accel_1..3 in drivers/protocol/rig.dbc): the loop's row, the rig and its twin have this many.
 PROTOCOL_STORIES: Final = 3
 
 # ---------------------------------------------------------------------------- names

@@ -23,7 +23,7 @@ from harness.runs import dry_run as dry_run_module
 ROOT = Path(__file__).resolve().parents[2]
 RELAY = """
 import sys, time
-from drivers.seqpacket.bus import SeqPacketBus
+from drivers.transports.seqpacket.bus import SeqPacketBus
 bus = SeqPacketBus(sys.argv[1])
 assert bus.is_hub
 print("ready", flush=True)

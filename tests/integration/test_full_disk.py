@@ -139,7 +139,7 @@ def _fail_writes_after(monkeypatch, rows: int) -> None:
 
 
 def test_a_lost_record_stops_safely_and_the_final_zero_command_reaches_the_bus(tmp_path, monkeypatch, capsys) -> None:
-    from drivers.codec import load_protocol
+    from drivers.protocol.codec import load_protocol
 
     protocol = load_protocol()
     command_id = protocol.messages["ACTUATOR_CMD"].frame_id

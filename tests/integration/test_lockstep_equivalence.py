@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from drivers.measurements import Measurements
-from drivers.protocol_values import DriveState, RigCommand
+from drivers.protocol.protocol_values import DriveState, RigCommand
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness, open_rig
 from harness.control.factory import make_controller, make_friction_estimator

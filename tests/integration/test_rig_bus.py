@@ -19,8 +19,8 @@ import can
 import numpy as np
 import pytest
 
-from drivers.decoder import RxStatus
-from drivers.protocol_values import DriveState, FaultCode, RigCommand
+from drivers.protocol.decoder import RxStatus
+from drivers.protocol.protocol_values import DriveState, FaultCode, RigCommand
 from harness import exit_codes
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness, open_rig

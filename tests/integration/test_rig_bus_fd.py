@@ -15,9 +15,9 @@ import uuid
 import can
 import pytest
 
-from drivers.decoder import RxStatus
-from drivers.e2e import protect
-from drivers.protocol_values import RigCommand
+from drivers.protocol.decoder import RxStatus
+from drivers.protocol.e2e import protect
+from drivers.protocol.protocol_values import RigCommand
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_rig
 from harness.profile import load_profile

@@ -22,8 +22,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from drivers.decoder import RxStatus
-from drivers.protocol_values import DriveState, FaultCode, RigCommand
+from drivers.protocol.decoder import RxStatus
+from drivers.protocol.protocol_values import DriveState, FaultCode, RigCommand
 from drivers.rig_reader import NEW_SENDER_SILENCE_S
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness, open_rig

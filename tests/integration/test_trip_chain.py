@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from drivers.protocol_values import DriveState
+from drivers.protocol.protocol_values import DriveState
 from harness.loop.runner import ArmTimeout
 from harness.profile import load_profile
 from harness.recording import load_run

@@ -2,6 +2,9 @@
 
 - ``drivers/`` imports nothing from ``harness/``: the drivers know CAN and units, not the
   profile, the controller or the supervisor (docs/ARCHITECTURE.md, "One direction").
+- Inside ``drivers/`` the protocol (``drivers.protocol``) imports no transport and no role, the
+  transports (``drivers.transports``) import the protocol but no role, and the roles (the reader,
+  the writers, the link) keep the few loose modules of :data:`DRIVER_LOOSE_MODULES`.
 - No two modules import each other, even inside a function or only for a type: the import
   graph has no cycle.
   An import of a package's module counts as an import of the package too, since Python runs
@@ -127,7 +130,7 @@ def project_imports(
     dict of str to set of str
         Module name -> names of the project modules it imports (its own name excluded). A
         from-import counts the module it imports from, and the submodule when the imported
-        name is one (``from drivers import seqpacket`` -> ``drivers``, ``drivers.seqpacket``).
+        name is one (``from drivers.transports import seqpacket`` -> ``drivers``, ``drivers.transports.seqpacket``).
     """
     packages = tuple(packages)
     modules = project_modules(root, packages)
@@ -151,6 +154,41 @@ def test_drivers_import_nothing_from_harness() -> None:
     }
     offenders = {module: deps for module, deps in offenders.items() if deps}
     assert not offenders, f"drivers must not import harness; found: {offenders}"
+
+
+#: What each part of the drivers may import of ``drivers``: the protocol knows no bus, the transports
+#: carry frames without knowing the roles that read and write them (docs/ARCHITECTURE.md).
+DRIVER_LAYERS = {
+    "drivers.errors": ("drivers.errors",),
+    "drivers.protocol": ("drivers.protocol", "drivers.errors"),
+    "drivers.transports": ("drivers.transports", "drivers.protocol", "drivers.errors"),
+}
+#: The only modules directly in ``drivers/``: the package, the errors every part raises, and the roles
+#: on any bus (the readers, the writers, the decoded control sample, the link that puts them together).
+DRIVER_LOOSE_MODULES = ("__init__.py", "errors.py", "link.py", "measurements.py", "reader.py", "rig_reader.py", "writer.py")
+
+
+def test_the_protocol_knows_no_transport_and_the_transports_no_role() -> None:
+    graph = project_imports()
+    assert all(any(_in(module, layer) for module in graph) for layer in DRIVER_LAYERS), "a driver layer without modules"
+    upward = sorted(
+        f"{module} -> {dep}"
+        for module, deps in graph.items()
+        for layer, allowed in DRIVER_LAYERS.items()
+        if _in(module, layer)
+        for dep in deps
+        if _in(dep, "drivers") and dep != "drivers" and not any(_in(dep, a) for a in allowed)
+    )
+    assert not upward, f"driver imports from the protocol to a transport or a role, or from a transport to a role: {upward}"
+
+
+def test_drivers_keep_only_the_roles_loose() -> None:
+    loose = sorted(path.name for path in (REPO / "drivers").glob("*.py"))
+    assert "reader.py" in loose, "not the drivers package"
+    others = sorted(set(loose) - set(DRIVER_LOOSE_MODULES))
+    assert not others, (
+        f"drivers/ keeps only {', '.join(DRIVER_LOOSE_MODULES)} loose; move {others} to drivers/protocol/ or drivers/transports/"
+    )
 
 
 def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
@@ -260,7 +298,7 @@ def config_modules(graph: dict[str, set[str]]) -> list[str]:
 def settings_only(graph: dict[str, set[str]], module: str) -> list[str]:
     """What ``module`` reaches at run time beyond settings: the foundation, the drivers' protocol values, other
     section configs, packages' ``__init__`` and leaves (modules that import nothing of the project but those)."""
-    allowed_roots = (*FOUNDATION, "drivers.protocol_values", "drivers.protocol", "drivers")
+    allowed_roots = (*FOUNDATION, "drivers.protocol.protocol_values")
 
     def plain(dep: str) -> bool:
         return any(_in(dep, root) for root in allowed_roots) or dep in graph and dep.endswith(".config")

@@ -6,7 +6,7 @@ two fixtures, ``config`` (a :class:`Channel` that can be opened) and ``nonexiste
 :class:`TestVirtualContract` runs it on python-can's ``virtual`` interface here;
 tests/vcan/test_socketcan_contract.py runs the same bodies on SocketCAN ``vcan0``.
 
-Also here: the error messages of :func:`drivers.bus.open_bus` for a missing
+Also here: the error messages of :func:`drivers.transports.bus.open_bus` for a missing
 channel or a kernel without CAN, checked against a fake ``/sys/class/net``.
 """
 
@@ -21,11 +21,11 @@ from typing import NamedTuple
 import can
 import pytest
 
-from drivers.bus import kernel_has_socketcan, open_bus, socketcan_preflight
-from drivers.codec import MessageCodec, load_protocol
-from drivers.decoder import Decoder, RxStatus
 from drivers.errors import BusError
+from drivers.protocol.codec import MessageCodec, load_protocol
+from drivers.protocol.decoder import Decoder, RxStatus
 from drivers.reader import FrameReader, HarnessReader
+from drivers.transports.bus import kernel_has_socketcan, open_bus, socketcan_preflight
 from drivers.writer import FrameWriter, HarnessWriter
 
 PROTOCOL = load_protocol()
@@ -34,7 +34,7 @@ RECV_TIMEOUT_S = 2.0
 
 
 class Channel(NamedTuple):
-    """What :func:`drivers.bus.open_bus` takes: ``open_bus(*channel)``."""
+    """What :func:`drivers.transports.bus.open_bus` takes: ``open_bus(*channel)``."""
 
     interface: str
     channel: str

@@ -1,4 +1,4 @@
-"""drivers/busload.py: frame length formula, load from DBC and rates, refusal above the allowed share.
+"""drivers/protocol/busload.py: frame length formula, load from DBC and rates, refusal above the allowed share.
 
 Also the profile's side: harness/canbus/config.py (rates of every message) and harness/canbus/link.py
 (refusal before the bus is opened).
@@ -10,9 +10,9 @@ import dataclasses
 
 import pytest
 
-from drivers.busload import BusLoad, bus_load, check_bus_load, frame_bits
-from drivers.codec import load_protocol
 from drivers.errors import BusLoadError, ProtocolError
+from drivers.protocol.busload import BusLoad, bus_load, check_bus_load, frame_bits
+from drivers.protocol.codec import load_protocol
 from harness.canbus.config import RATE_FIELDS, CanConfig
 from harness.config.schema import build
 from harness.errors import ProfileError

@@ -1,4 +1,4 @@
-"""CAN FD in the bus-load check (drivers/busload.py), the profile's ``can.fd`` keys and the FD links.
+"""CAN FD in the bus-load check (drivers/protocol/busload.py), the profile's ``can.fd`` keys and the FD links.
 
 The frame lengths are counted here field by field from the FD base frame format of
 ISO 11898-1:2015, independently of the module's formula, so a wrong term in either shows.
@@ -13,11 +13,11 @@ from pathlib import Path
 import can
 import pytest
 
-from drivers.bus import open_bus, socketcan_preflight
-from drivers.busload import bus_load, check_bus_load, fd_frame_bits, frame_bits, frame_time_s
-from drivers.codec import load_protocol
 from drivers.errors import BusError, BusLoadError
 from drivers.link import open_harness, open_rig
+from drivers.protocol.busload import bus_load, check_bus_load, fd_frame_bits, frame_bits, frame_time_s
+from drivers.protocol.codec import load_protocol
+from drivers.transports.bus import open_bus, socketcan_preflight
 from harness.canbus.config import CanConfig
 from harness.canbus.link import prepare
 from harness.errors import ProfileError

@@ -1,4 +1,4 @@
-"""The CAN FD variant of the protocol: drivers/rig_fd.dbc against rig.dbc and cantools, FD frame checks and E2E.
+"""The CAN FD variant of the protocol: drivers/protocol/rig_fd.dbc against rig.dbc and cantools, FD frame checks and E2E.
 
 The FD DBC is hand-written beside the classic one; these tests hold the two together (same
 messages, signals, Data-IDs and value tables) and check the FD-only SENSOR_SET bit for bit against
@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from drivers.codec import DEFAULT_DBC, DEFAULT_FD_DBC, load_protocol
-from drivers.decoder import Decoder, RxStatus
 from drivers.errors import ProtocolError
+from drivers.protocol.codec import DEFAULT_DBC, DEFAULT_FD_DBC, load_protocol
+from drivers.protocol.decoder import Decoder, RxStatus
 from drivers.reader import SENSOR_SET_PARTS
 from tests.conftest import edited_dbc
 from tests.unit.test_codec import protected

@@ -1,7 +1,7 @@
 """Every file the project cites exists in the project: docs, READMEs, and the code's docstrings and comments.
 
 What counts as a cited path (:func:`cited_paths`), in the text of README.md, docs/*.md,
-drivers/PROTOCOL.md, benchmarks/README.md, logs/README.md, the Makefile, pyproject.toml, and
+drivers/protocol/PROTOCOL.md, benchmarks/README.md, logs/README.md, the Makefile, pyproject.toml, and
 the docstrings and comments of every module under harness/, drivers/, tests/, benchmarks/ and
 scripts/ (string literals that are not docstrings are code, not citations):
 
@@ -42,7 +42,7 @@ NOT_FILES_OF_THE_PROJECT = {
     "profiles/my_rig.yaml": "the user's own profile in an example command (README)",
 }
 #: Documents cited in the text and not the code: the Markdown files, and the two build files' comments and paths.
-DOCUMENTS = ("README.md", "drivers/PROTOCOL.md", "benchmarks/README.md", "logs/README.md", "Makefile", "pyproject.toml")
+DOCUMENTS = ("README.md", "drivers/protocol/PROTOCOL.md", "benchmarks/README.md", "logs/README.md", "Makefile", "pyproject.toml")
 PACKAGES = ("harness", "drivers", "tests", "benchmarks", "scripts")
 
 _URL = re.compile(r"\w+://\S+")

@@ -1,4 +1,4 @@
-"""drivers/codec.py and drivers/rig.dbc: round trips, cantools agreement, and every kind of rejection."""
+"""drivers/protocol/codec.py and drivers/protocol/rig.dbc: round trips, cantools agreement, and every kind of rejection."""
 
 from __future__ import annotations
 
@@ -9,15 +9,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drivers.codec import (
+from drivers.protocol.codec import (
     DEFAULT_DBC,
     MessageCodec,
     Protocol,
     check_protocol_version,
     load_protocol,
 )
-from drivers.decoder import Decoder, RxStatus
-from drivers.e2e import protect
+from drivers.protocol.decoder import Decoder, RxStatus
+from drivers.protocol.e2e import protect
 from harness.errors import ProtocolError
 
 PROTOCOL = load_protocol()
@@ -155,7 +155,7 @@ def test_rejects_wrong_length() -> None:
     assert decoder.rejected("TABLE_SENSORS", RxStatus.WRONG_LENGTH) == 2
 
 
-#: Every message of drivers/rig.dbc that carries the E2E CRC (byte 0, signal ``crc``): all of them today.
+#: Every message of drivers/protocol/rig.dbc that carries the E2E CRC (byte 0, signal ``crc``): all of them today.
 CRC_MESSAGES = sorted(m.name for m in PROTOCOL.database.messages if any(s.name == "crc" for s in m.signals))
 
 

@@ -1,4 +1,4 @@
-"""drivers/reader.py, drivers/rig_reader.py, drivers/writer.py and drivers/bus.py's BusHealth: samples, ages, counters."""
+"""drivers/reader.py, drivers/rig_reader.py, drivers/writer.py, drivers/transports/bus.py's BusHealth: samples, ages, counts."""
 
 from __future__ import annotations
 
@@ -14,17 +14,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drivers import bus as busmod
 from drivers import rig_reader
-from drivers.bus import BusHealth, open_bus
-from drivers.codec import load_protocol
-from drivers.decoder import RxStatus
 from drivers.errors import BusError, ProtocolError
 from drivers.link import open_harness, open_rig
 from drivers.measurements import Measurements
-from drivers.protocol_values import DriveState, FaultCode, RigCommand
+from drivers.protocol.codec import load_protocol
+from drivers.protocol.decoder import RxStatus
+from drivers.protocol.protocol_values import DriveState, FaultCode, RigCommand
 from drivers.reader import FrameReader, HarnessReader, damaged_estop
 from drivers.rig_reader import RigReader
+from drivers.transports import bus as busmod
+from drivers.transports.bus import BusHealth, open_bus
 from drivers.writer import HarnessWriter, RigWriter
 
 PROTOCOL = load_protocol()

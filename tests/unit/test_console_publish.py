@@ -6,7 +6,7 @@ import tracemalloc
 
 from rich.console import Console
 
-from drivers.protocol_values import DriveState, FaultCode
+from drivers.protocol.protocol_values import DriveState, FaultCode
 from harness.console.live import LiveConsole, fault_name
 from harness.loop.status import LoopStatus
 from harness.loop.status_block import EVENT_LINES

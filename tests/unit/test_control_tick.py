@@ -14,9 +14,9 @@ import uuid
 
 import pytest
 
-from drivers.codec import load_protocol
-from drivers.e2e import protect
-from drivers.protocol_values import DriveState, EstopSource, FaultCode
+from drivers.protocol.codec import load_protocol
+from drivers.protocol.e2e import protect
+from drivers.protocol.protocol_values import DriveState, EstopSource, FaultCode
 from drivers.reader import RIG_RX, FrameReader
 from harness.canbus.config import CanConfig
 from harness.canbus.link import open_harness, open_rig

@@ -1,8 +1,8 @@
 """The DBC's value tables and the enums that name them in code: one set of names, checked both ways.
 
-``drivers/rig.dbc`` names the values of the drive state, fault code, rig command, E-stop
+``drivers/protocol/rig.dbc`` names the values of the drive state, fault code, rig command, E-stop
 source and the harness's lifecycle state (``VAL_`` lines, cantools' ``signal.choices``).
-The code uses :mod:`drivers.protocol_values` and :class:`harness.safety.lifecycle.State`;
+The code uses :mod:`drivers.protocol.protocol_values` and :class:`harness.safety.lifecycle.State`;
 these tests keep them equal, keep the codec decoding numbers, and check that
 ``cantools decode`` prints the names.
 """
@@ -16,10 +16,10 @@ from pathlib import Path
 
 import pytest
 
-from drivers.codec import DEFAULT_DBC, load_protocol
-from drivers.decoder import Decoder, RxStatus
 from drivers.errors import ProtocolError
-from drivers.protocol_values import (
+from drivers.protocol.codec import DEFAULT_DBC, load_protocol
+from drivers.protocol.decoder import Decoder, RxStatus
+from drivers.protocol.protocol_values import (
     VALUE_TABLES,
     DriveState,
     FaultCode,

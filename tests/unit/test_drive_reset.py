@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.protocol_values import RESETTABLE_FAULTS, DriveState, FaultCode, fault_name
+from drivers.protocol.protocol_values import RESETTABLE_FAULTS, DriveState, FaultCode, fault_name
 from harness.rig.drive import Drive, ResetVerdict
 from harness.rig.journal import JOURNAL_LINES, RigJournal
 from harness.safety.lifecycle import State

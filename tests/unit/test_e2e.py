@@ -1,4 +1,4 @@
-"""CRC-8/2F and rolling-counter checks of drivers/e2e.py against independent references."""
+"""CRC-8/2F and rolling-counter checks of drivers/protocol/e2e.py against independent references."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from cantools.autosar.end_to_end import compute_profile2_crc
 from hypothesis import given
 from hypothesis import strategies as st
 
-from drivers.e2e import crc8_2f, parse_data_ids, profile2_crc, protect
+from drivers.protocol.e2e import crc8_2f, parse_data_ids, profile2_crc, protect
 
 DATA_IDS = tuple(range(0x40, 0x50))
 

@@ -1,8 +1,8 @@
-"""The compiled receive side (drivers/frame_kernel.py): the same judgement on every path.
+"""The compiled receive side (drivers/protocol/frame_kernel.py): the same judgement on every path.
 
 The reader takes a ``seqpacket`` bus's datagrams straight off its socket and checks and decodes
-them in one compiled call (:meth:`drivers.decoder.Decoder.receive_datagrams`); on any other bus
-it decodes each :class:`can.Message` through :meth:`~drivers.decoder.Decoder.decode`. These
+them in one compiled call (:meth:`drivers.protocol.decoder.Decoder.receive_datagrams`); on any other bus
+it decodes each :class:`can.Message` through :meth:`~drivers.protocol.decoder.Decoder.decode`. These
 tests feed the same frames, good and bad of every kind, to a reader on each path and require
 the same outcome to the last count; and they pin the counter rules the E2E profile sets.
 """
@@ -21,16 +21,16 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from drivers import frame_kernel as kernel
-from drivers.bus import CAN_ERR_BUSOFF
-from drivers.codec import Protocol, load_protocol
-from drivers.decoder import Decoder, RxStatus
-from drivers.e2e import profile2_crc, protect
-from drivers.protocol_values import EstopSource
+from drivers.protocol import frame_kernel as kernel
+from drivers.protocol.codec import Protocol, load_protocol
+from drivers.protocol.datagram import encode_frame
+from drivers.protocol.decoder import Decoder, RxStatus
+from drivers.protocol.e2e import profile2_crc, protect
+from drivers.protocol.protocol_values import EstopSource
 from drivers.reader import HARNESS_RX, HarnessReader
-from drivers.seqpacket.bus import SeqPacketBus
-from drivers.seqpacket.channel import parse_channel
-from drivers.seqpacket.wire import encode_frame
+from drivers.transports.bus import CAN_ERR_BUSOFF
+from drivers.transports.seqpacket.bus import SeqPacketBus
+from drivers.transports.seqpacket.channel import parse_channel
 
 CLASSIC = load_protocol()
 FD = load_protocol(fd=True)
@@ -166,7 +166,9 @@ def test_a_poll_compiles_nothing_the_reader_did_not_compile_when_it_was_made(pai
     reader = HarnessReader(receiver, CLASSIC)
     kernels = (kernel.decode_frame, kernel.decode_datagrams, kernel.receive_datagrams, kernel.unpack_signals)
     before = [len(k.signatures) for k in kernels]
-    assert all(before), "the decoder compiles (or loads) every kernel when it is made"
+    # unpack_signals runs inside the other three; its own dispatcher has a signature only once the codec's
+    # unpack ran in this process, or the kernels were compiled here rather than loaded from numba's cache
+    assert all(before[:3]), "the decoder compiles (or loads) every kernel a poll calls when it is made"
     for msg in _frames(CLASSIC, [(VALID, k, k) for k in range(8)] + [(BAD_CRC, 1, 3), (ERROR, 0, 0)]):
         sender.send(msg)
     assert reader.poll(NOW_S) == 10

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-from drivers.protocol_values import DriveState, FaultCode
+from drivers.protocol.protocol_values import DriveState, FaultCode
 from harness.safety.checks import CHECK_NAMES
 from harness.safety.events import EventKind
 from harness.safety.lifecycle import State

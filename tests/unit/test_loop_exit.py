@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.codec import load_protocol
+from drivers.protocol.codec import load_protocol
 from harness.loop.config import LoopConfig
 from harness.loop.runner import ControlLoop
 from harness.safety.lifecycle import State

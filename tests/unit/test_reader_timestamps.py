@@ -41,7 +41,7 @@ class StubBus:
 
 
 def test_a_frame_stamped_in_the_future_has_no_valid_age():
-    from drivers.codec import load_protocol
+    from drivers.protocol.codec import load_protocol
     from drivers.reader import HarnessReader
 
     protocol = load_protocol()

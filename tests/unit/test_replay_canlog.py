@@ -7,7 +7,7 @@ from pathlib import Path
 import can
 import pytest
 
-from drivers.frame_flags import BRS, EXTENDED, FD, REMOTE, RX, flags_of
+from drivers.protocol.frame_flags import BRS, EXTENDED, FD, REMOTE, RX, flags_of
 from harness.replay.canlog import CanLogError, read_can_log
 
 FRAMES = [

@@ -159,8 +159,8 @@ def test_a_simulation_gets_no_timing_or_event_sections(tmp_path: Path) -> None:
 def test_a_drive_fault_is_named_from_the_fault_code_in_can_log(tmp_path: Path) -> None:
     import can
 
-    from drivers.codec import load_protocol
-    from drivers.protocol_values import DriveState, FaultCode
+    from drivers.protocol.codec import load_protocol
+    from drivers.protocol.protocol_values import DriveState, FaultCode
 
     codec = load_protocol()["ACTUATOR_STATUS"]
     values = {"drive_state": float(DriveState.FAULT), "pressure_ok": 1.0, "fault_code": float(FaultCode.HEARTBEAT_WATCHDOG),

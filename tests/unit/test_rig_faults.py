@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.protocol_values import DriveState, FaultCode
+from drivers.protocol.protocol_values import DriveState, FaultCode
 from harness.config.schema import build
 from harness.errors import ProfileError
 from harness.rig import faults as F

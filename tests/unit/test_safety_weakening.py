@@ -128,7 +128,7 @@ def test_max_force_beyond_the_dbc_is_refused_at_load():
 
 def test_the_protocol_limit_is_read_from_the_dbc(tmp_path):
     dbc = tmp_path / "narrow.dbc"
-    text = (REPO / "drivers" / "rig.dbc").read_text()
+    text = (REPO / "drivers" / "protocol" / "rig.dbc").read_text()
     dbc.write_text(text.replace('SG_ force : 16|16@1- (1,0) [-30000|30000] "N"', 'SG_ force : 16|16@1- (1,0) [-20000|20000] "N"'))
     overrides = [f"can.dbc_path={dbc}", "rig.actuator.force_limit_N=30000", "safety.force.max_force_N=25000", *ROOMY_FORCE]
     expected = r"expected at most 20000 N \(the range of the ACTUATOR_CMD force signal of .*narrow.dbc"

@@ -1,4 +1,4 @@
-"""The ``seqpacket`` interface (drivers/seqpacket/): a CAN bus over Unix SOCK_SEQPACKET sockets.
+"""The ``seqpacket`` interface (drivers/transports/seqpacket/): a CAN bus over Unix SOCK_SEQPACKET sockets.
 
 In-process tests open several buses in one process (they are real sockets, so the
 hub, relay and fail-over logic runs as across processes); the cross-process tests
@@ -26,18 +26,18 @@ from pathlib import Path
 import can
 import pytest
 
-from drivers import seqpacket
-from drivers.bus import is_queue_full
 from drivers.errors import BusError
-from drivers.seqpacket.bus import (
+from drivers.protocol.datagram import encode_frame
+from drivers.transports import seqpacket
+from drivers.transports.bus import is_queue_full
+from drivers.transports.seqpacket.bus import (
     ACCEPT_CHECK_INTERVAL_S,
     BYTES_PER_QUEUED_FRAME,
     SOCKET_BUFFER_BYTES,
     WANTED_BACKLOG_FRAMES,
     SeqPacketBus,
 )
-from drivers.seqpacket.channel import ABSTRACT_PREFIX, parse_channel, private_directory
-from drivers.seqpacket.wire import encode_frame
+from drivers.transports.seqpacket.channel import ABSTRACT_PREFIX, parse_channel, private_directory
 
 REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
@@ -669,7 +669,7 @@ def test_importing_the_drivers_registers_nothing(channel: str) -> None:
 
 @pytest.mark.usefixtures("without_the_entry_point")
 def test_open_bus_registers_the_interface_where_the_entry_point_is_missing(channel: str) -> None:
-    from drivers.bus import open_bus
+    from drivers.transports.bus import open_bus
 
     bus = open_bus("seqpacket", channel)
     try:
@@ -680,15 +680,15 @@ def test_open_bus_registers_the_interface_where_the_entry_point_is_missing(chann
 
 def test_entry_point_is_installed_and_names_the_bus() -> None:
     found = {ep.name: ep for ep in entry_points(group="can.interface")}
-    assert "seqpacket" in found and found["seqpacket"].value == "drivers.seqpacket:SeqPacketBus", (
+    assert "seqpacket" in found and found["seqpacket"].value == "drivers.transports.seqpacket:SeqPacketBus", (
         "reinstall the package (pip install -e .) so python-can finds the seqpacket entry point"
     )
     assert found["seqpacket"].load() is SeqPacketBus
-    assert can.interfaces.BACKENDS["seqpacket"] == ("drivers.seqpacket", "SeqPacketBus")
+    assert can.interfaces.BACKENDS["seqpacket"] == ("drivers.transports.seqpacket", "SeqPacketBus")
 
 
 def test_open_bus_opens_seqpacket(channel: str) -> None:
-    from drivers.bus import open_bus
+    from drivers.transports.bus import open_bus
 
     bus = open_bus("seqpacket", channel)
     try:

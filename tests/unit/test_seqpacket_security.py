@@ -23,10 +23,10 @@ import can
 import pytest
 
 from drivers.errors import BusError
-from drivers.seqpacket import channel as channel_module
-from drivers.seqpacket.bus import SeqPacketBus
-from drivers.seqpacket.channel import parse_channel
-from drivers.seqpacket.wire import encode_frame
+from drivers.protocol.datagram import encode_frame
+from drivers.transports.seqpacket import channel as channel_module
+from drivers.transports.seqpacket.bus import SeqPacketBus
+from drivers.transports.seqpacket.channel import parse_channel
 
 STRANGER_UID = 65534  # nobody
 ESTOP_ID = 0x010
@@ -312,7 +312,7 @@ def test_a_hub_refuses_inside_its_receive_path_without_a_name_lookup_or_a_log_li
     buses.append(hub)
     node = SeqPacketBus(channel)
     buses.append(node)
-    caplog.set_level("WARNING", logger="drivers.seqpacket.bus")
+    caplog.set_level("WARNING", logger="drivers.transports.seqpacket.bus")
     assert _serve(hub, 0.2) == []
     assert hub.refused_count >= 1 and hub.peer_count == 0
     assert lookups == [] and caplog.records == [], "the tick path looked a name up or logged"
@@ -330,7 +330,7 @@ def test_a_node_refuses_a_hub_that_is_not_the_expected_process(buses: list[SeqPa
 
 
 def test_policy_admits_the_user_and_the_named_group_only() -> None:
-    from drivers.seqpacket.peers import PeerCredentials, PeerPolicy
+    from drivers.transports.seqpacket.peers import PeerCredentials, PeerPolicy
 
     policy = PeerPolicy(uid=1000, group_gid=50, member_uids=frozenset({1001}))
     assert policy.refusal(PeerCredentials(10, 1000, 1000)) == ""

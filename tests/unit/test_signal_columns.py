@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import harness.recording as recording
-from drivers.codec import load_protocol
+from drivers.protocol.codec import load_protocol
 from harness.recording.layout import check_columns
 from harness.rig.sensors import SIGNALS
 from harness.signals import columns as layout

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.protocol_values import DriveState, FaultCode
+from drivers.protocol.protocol_values import DriveState, FaultCode
 from harness.loop.timing import GAP_PARTS, GapTrace
 from harness.safety.config import SafetyConfig
 from harness.safety.health import TickHealth

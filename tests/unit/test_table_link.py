@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.protocol_values import RigCommand
+from drivers.protocol.protocol_values import RigCommand
 from harness.loop.config import LoopConfig
 from harness.loop.runner import TABLE_START_TIMEOUT_S, ControlLoop
 from harness.loop.table_link import CanTableLink

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.codec import load_protocol
-from drivers.decoder import Decoder, RxStatus
+from drivers.protocol.codec import load_protocol
+from drivers.protocol.decoder import Decoder, RxStatus
 from harness.loop.trip_outputs import TripOutputs
 from harness.safety.lifecycle import State
 from tests.unit.test_control_tick import Bench

@@ -12,9 +12,9 @@ import math
 
 import pytest
 
-from drivers.busload import bus_load, frame_bits
-from drivers.codec import load_protocol
-from drivers.protocol_values import EstopSource, RigCommand
+from drivers.protocol.busload import bus_load, frame_bits
+from drivers.protocol.codec import load_protocol
+from drivers.protocol.protocol_values import EstopSource, RigCommand
 from harness.canbus.config import CanConfig
 from harness.errors import ProfileError
 from harness.loop.trip_outputs import SUPERVISOR_SOURCE, TripOutputs

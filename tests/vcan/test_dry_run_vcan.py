@@ -17,7 +17,7 @@ from pathlib import Path
 import can
 import pytest
 
-from drivers.protocol_values import DriveState
+from drivers.protocol.protocol_values import DriveState
 from harness import exit_codes
 from harness.recording import load_run
 from tests.realtime_runs import run_real_time

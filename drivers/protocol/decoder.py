@@ -2,7 +2,7 @@
 
 :class:`Decoder` keeps, per received message, the rolling-counter state, a preallocated
 list of the latest accepted SI values, and counts per :class:`RxStatus`, in the arrays the
-compiled checks of :mod:`drivers.frame_kernel` work on. Checks, in order: known ID, data
+compiled checks of :mod:`drivers.protocol.frame_kernel` work on. Checks, in order: known ID, data
 frame in the message's format (classic or CAN FD, as the DBC says), length, CRC (with
 the counter's Data-ID), counter, value ranges. The counter is checked before the ranges
 so that a genuine frame with a bad value still advances the counter state (no double
@@ -17,14 +17,14 @@ from enum import IntEnum
 
 import numpy as np
 
-from drivers import frame_kernel as kernel
-from drivers.codec import MessageCodec, Protocol
 from drivers.errors import ProtocolError
-from drivers.frame_flags import EXTENDED, FD, REMOTE
-from drivers.seqpacket.wire import HEADER, MAX_DATAGRAM_BYTES
+from drivers.protocol import frame_kernel as kernel
+from drivers.protocol.codec import MessageCodec, Protocol
+from drivers.protocol.datagram import HEADER, MAX_DATAGRAM_BYTES
+from drivers.protocol.frame_flags import EXTENDED, FD, REMOTE
 
 assert (HEADER.size, MAX_DATAGRAM_BYTES) == (kernel.HEADER_BYTES, kernel.MAX_DATAGRAM_BYTES), \
-    "the kernel reads the seqpacket datagram as drivers.seqpacket.wire writes it"
+    "the kernel reads the seqpacket datagram as drivers.protocol.datagram writes it"
 
 
 class RxStatus(IntEnum):
@@ -59,10 +59,10 @@ class DatagramBatch:
     rows : list of memoryview
         Writable views of the datagram rows, one per frame (``recv_into`` targets).
     frame_ints, flat_ints : memoryview
-        Per frame (``frame_ints[k, column]``, columns :data:`~drivers.frame_kernel.F_SIZE` ...; ``flat_ints``
+        Per frame (``frame_ints[k, column]``, columns :data:`~drivers.protocol.frame_kernel.F_SIZE` ...; ``flat_ints``
         the same memory in one dimension): datagram
-        size (bytes, the caller writes it), identifier, flags (:mod:`drivers.frame_flags`), status code
-        (:data:`drivers.frame_kernel.NOT_DECODED` for an error frame or a foreign identifier), message slot.
+        size (bytes, the caller writes it), identifier, flags (:mod:`drivers.protocol.frame_flags`), status code
+        (:data:`drivers.protocol.frame_kernel.NOT_DECODED` for an error frame or a foreign identifier), message slot.
     value_rows : list of memoryview
         Per frame, the values it carried.
     """
@@ -81,7 +81,7 @@ class DatagramBatch:
 class Decoder:
     """Decodes received frames into preallocated value lists, rejecting and counting bad ones.
 
-    The checks and the decoding are :mod:`drivers.frame_kernel`'s, on this decoder's arrays.
+    The checks and the decoding are :mod:`drivers.protocol.frame_kernel`'s, on this decoder's arrays.
 
     Parameters
     ----------
@@ -208,7 +208,7 @@ class Decoder:
     def receive_datagrams(self, fd: int, batch: DatagramBatch, capacity: int) -> tuple[int, int, int]:
         """Take the datagrams waiting on socket ``fd`` into ``batch`` and decode them, in one compiled call.
 
-        Returns ``(frames, end, malformed)`` as :func:`drivers.frame_kernel.receive_datagrams`;
+        Returns ``(frames, end, malformed)`` as :func:`drivers.protocol.frame_kernel.receive_datagrams`;
         the frames are left in ``batch`` as :meth:`decode_datagrams` leaves them.
         """
         frames, end, malformed = kernel.receive_datagrams(

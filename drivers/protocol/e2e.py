@@ -1,12 +1,12 @@
 """End-to-end protection: AUTOSAR E2E profile-2 style CRC-8/2F and the 4-bit rolling counter.
 
-Frame layout shared by every message of ``drivers/rig.dbc``:
+Frame layout shared by every message of ``drivers/protocol/rig.dbc``:
 
 - byte 0: CRC-8/2F (polynomial 0x2F, the SAE J1850 polynomial variant AUTOSAR calls
   ``Crc8H2F``; init 0xFF, final xor 0xFF, not reflected; check value 0xDF over ``b"123456789"``);
 - bits 8-11 (low nibble of byte 1): the rolling counter 0..15.
 
-The same layout protects the CAN FD messages of ``drivers/rig_fd.dbc``, the 32-byte
+The same layout protects the CAN FD messages of ``drivers/protocol/rig_fd.dbc``, the 32-byte
 SENSOR_SET included: nothing here depends on the length (the CRC covers the whole payload).
 
 The CRC covers bytes 1..DLC-1 followed by one Data-ID byte, picked from the
@@ -14,7 +14,7 @@ message's 16-entry Data-ID list by the counter (profile 2). A frame routed to th
 wrong message, or one whose counter nibble was corrupted, therefore fails the CRC
 even if its bytes happen to be self-consistent.
 
-The receiver keeps the counter of each message (:mod:`drivers.frame_kernel` checks every
+The receiver keeps the counter of each message (:mod:`drivers.protocol.frame_kernel` checks every
 received frame): the first frame after a reset is accepted (nothing to compare with), then
 the counter must advance by exactly one (mod 16). A repeated counter is rejected and the
 state is kept; a skipped counter (frames lost or injected) is rejected and the state
@@ -45,7 +45,7 @@ _TABLE: tuple[int, ...] = _make_table(CRC8_2F_POLY)
 
 
 def crc_table() -> tuple[int, ...]:
-    """The CRC-8/2F lookup table (256 entries), for the compiled receive side (:mod:`drivers.frame_kernel`)."""
+    """The CRC-8/2F lookup table (256 entries), for the compiled receive side (:mod:`drivers.protocol.frame_kernel`)."""
     return _TABLE
 
 

@@ -1,8 +1,11 @@
 """The ``seqpacket`` python-can interface: a CAN bus between the processes of one host, over Unix sockets.
 
 - :mod:`.channel`: a channel name (``harness``, ``@harness``, a socket path) and the address its hub listens on.
-- :mod:`.wire`: one datagram per frame (header, then the data).
-- :mod:`.bus`: :class:`~drivers.seqpacket.bus.SeqPacketBus`, the python-can bus: hub, peers, relay.
+- :mod:`.peers`: who may join a channel (the peer's kernel credentials).
+- :mod:`.bus`: :class:`~drivers.transports.seqpacket.bus.SeqPacketBus`, the python-can bus: hub, peers, relay;
+  it offers the datagram path (:class:`~drivers.transports.datagram_path.DatagramPath`).
+
+Its wire is :mod:`drivers.protocol.datagram`: one datagram per frame (header, then the data).
 
 How python-can finds it
 -----------------------
@@ -10,19 +13,19 @@ How python-can finds it
 ``can.interfaces.BACKENDS`` (name -> module and class) and the frozen
 ``VALID_INTERFACES``; ``can.Bus(interface=...)`` refuses a name outside the second and
 imports the class the first names. This project declares the entry point
-(``pyproject.toml``: ``seqpacket = "drivers.seqpacket:SeqPacketBus"``), so an installed
+(``pyproject.toml``: ``seqpacket = "drivers.transports.seqpacket:SeqPacketBus"``), so an installed
 checkout needs nothing more; the entry point names this package, as python-can's own
 backends name theirs (``can.interfaces.socketcan``), so the bus class is importable from here.
 
 Where the entry point is not installed (a checkout on ``PYTHONPATH`` only), :func:`register`
-adds the interface to those two tables: :func:`drivers.bus.open_bus` calls it before it opens
+adds the interface to those two tables: :func:`drivers.transports.bus.open_bus` calls it before it opens
 a ``seqpacket`` bus, the one call besides the entry point. Importing the package registers
 nothing.
 """
 
 import can
 
-from drivers.seqpacket.bus import SeqPacketBus
+from drivers.transports.seqpacket.bus import SeqPacketBus
 
 #: python-can interface name.
 INTERFACE = "seqpacket"

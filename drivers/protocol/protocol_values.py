@@ -1,8 +1,8 @@
-"""The protocol's named numbers: its version and the value tables of ``drivers/rig.dbc``.
+"""The protocol's named numbers: its version and the value tables of ``drivers/protocol/rig.dbc``.
 
 The DBC is the source of truth: each enum here mirrors one ``VAL_`` table of the
 DBC (cantools reads it as ``signal.choices``, and ``cantools decode`` prints the
-names), member for member. :func:`drivers.codec.load_protocol` refuses a DBC whose
+names), member for member. :func:`drivers.protocol.codec.load_protocol` refuses a DBC whose
 value table for one of these signals differs (:data:`VALUE_TABLES`), and a unit test
 checks the packaged DBC, so the names in code and on the bus cannot drift apart.
 
@@ -21,10 +21,10 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-#: The ``ProtocolVersion`` of the packaged ``drivers/rig.dbc``.
+#: The ``ProtocolVersion`` of the packaged ``drivers/protocol/rig.dbc``.
 CURRENT_PROTOCOL_VERSION = 1
 
-#: CAN FD protocol (``drivers/rig_fd.dbc``): the messages whose payloads SENSOR_SET carries, in its
+#: CAN FD protocol (``drivers/protocol/rig_fd.dbc``): the messages whose payloads SENSOR_SET carries, in its
 #: order, three signals each; on that protocol they are not sent on their own.
 SENSOR_SET_PARTS: tuple[str, ...] = ("TABLE_SENSORS", "BASE_SENSORS", "STORY_DRIFTS", "FLOOR_ACCELS")
 

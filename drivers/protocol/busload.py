@@ -52,8 +52,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from drivers.codec import FD_LENGTHS, MessageCodec, Protocol
 from drivers.errors import BusLoadError, ProtocolError
+from drivers.protocol.codec import FD_LENGTHS, MessageCodec, Protocol
 
 STUFFABLE_HEADER_BITS_STD = 34
 STUFFABLE_HEADER_BITS_EXT = 54

@@ -1,4 +1,4 @@
-"""The CAN codec: ``drivers/rig.dbc`` (or its CAN FD variant ``rig_fd.dbc``) compiled once into fast encoders and decoders.
+"""The CAN codec: ``drivers/protocol/rig.dbc`` (or its FD variant ``rig_fd.dbc``) compiled once into fast encoders and decoders.
 
 cantools parses the DBC once (:func:`load_protocol`); every message is then compiled
 into a :class:`MessageCodec` that packs and unpacks its signals with plain integer
@@ -7,7 +7,7 @@ never looks anything up by name, parses, or builds a dict. Test suites check the
 codecs bit for bit against cantools' own ``Message.encode``/``decode``.
 
 Values in this API are SI (m, m/s, m/s^2, N, s) in the DBC's signal order, without
-the ``crc`` and ``counter`` signals, which the codec owns (:mod:`drivers.e2e`).
+the ``crc`` and ``counter`` signals, which the codec owns (:mod:`drivers.protocol.e2e`).
 
 A DBC describes one frame format throughout: every message classic CAN (``rig.dbc``), or
 every message a CAN FD frame (``rig_fd.dbc``: ``BA_ "VFrameFormat"`` ``StandardCAN_FD`` on each
@@ -15,7 +15,7 @@ message, which cantools reads as ``Message.is_fd``; ``BA_ "CANFD_BRS"`` whether 
 switches to the data bit rate). :func:`load_protocol` refuses a mixed file, and one whose
 format is not the one the profile's ``can.fd`` asks for.
 
-The receive-side checks and counts live in :mod:`drivers.decoder`.
+The receive-side checks and counts live in :mod:`drivers.protocol.decoder`.
 """
 
 from __future__ import annotations
@@ -29,10 +29,10 @@ from pathlib import Path
 import cantools
 import numpy as np
 
-from drivers.e2e import parse_data_ids, profile2_crc, protect
 from drivers.errors import ProtocolError
-from drivers.frame_kernel import signal_plan, unpack_signals
-from drivers.protocol_values import VALUE_TABLES, choices_of
+from drivers.protocol.e2e import parse_data_ids, profile2_crc, protect
+from drivers.protocol.frame_kernel import signal_plan, unpack_signals
+from drivers.protocol.protocol_values import VALUE_TABLES, choices_of
 
 #: The packaged protocol description (classic CAN).
 DEFAULT_DBC = Path(__file__).with_name("rig.dbc")
@@ -149,7 +149,7 @@ class MessageCodec:
             )
             for s in self.signals
         )
-        #: The signals' plan for the compiled unpacking (:func:`drivers.frame_kernel.signal_plan`).
+        #: The signals' plan for the compiled unpacking (:func:`drivers.protocol.frame_kernel.signal_plan`).
         self.plan = signal_plan(self.signals)
         self._float_bits = np.zeros(1, dtype=np.uint32)
         self._unpacked = np.zeros(len(self.signals))
@@ -225,7 +225,7 @@ class MessageCodec:
 
         ``data`` should have the message's length (missing bytes read as zeros). ``out`` is filled completely
         even when a value is out of range. The receive side's compiled unpacking
-        (:func:`drivers.frame_kernel.unpack_signals`) does the work.
+        (:func:`drivers.protocol.frame_kernel.unpack_signals`) does the work.
         """
         payload = np.frombuffer(data, dtype=np.uint8)
         if len(payload) < self.length:  # the missing bytes read as zeros (the kernel reads only within the length)
@@ -287,7 +287,7 @@ class Protocol:
             classic = next(name for name, codec in self.messages.items() if not codec.is_fd)
             raise ProtocolError(
                 f"{self.path}: {fd[0]} is a CAN FD frame but {classic} a classic one; "
-                "expected one frame format for every message (drivers/rig.dbc classic, drivers/rig_fd.dbc FD)"
+                "expected one frame format for every message (drivers/protocol/rig.dbc classic, drivers/protocol/rig_fd.dbc FD)"
             )
         return bool(fd)
 
@@ -307,7 +307,7 @@ class Protocol:
         """Refuse a DBC whose value table of a named signal differs from the drivers' enum.
 
         A DBC without the message, the signal or a value table for it is accepted as before;
-        one that names the values must name them as :data:`drivers.protocol_values.VALUE_TABLES` does.
+        one that names the values must name them as :data:`drivers.protocol.protocol_values.VALUE_TABLES` does.
         """
         for (message, signal), enum in VALUE_TABLES.items():
             codec = self.messages.get(message)
@@ -318,7 +318,7 @@ class Protocol:
             if found and found != expected:
                 raise ProtocolError(
                     f"{self.path}: VAL_ table of {message}.{signal} is {_describe(found)}; "
-                    f"expected {_describe(expected)} (drivers.protocol_values.{enum.__name__})"
+                    f"expected {_describe(expected)} (drivers.protocol.protocol_values.{enum.__name__})"
                 )
 
     def choice(self, message: str, signal: str, label: str) -> int:
@@ -367,8 +367,8 @@ def load_protocol(path: str | Path | None = None, *, fd: bool | None = None) -> 
     Parameters
     ----------
     path : str or Path, optional
-        The DBC; default :data:`DEFAULT_DBC` (``drivers/rig.dbc``), or :data:`DEFAULT_FD_DBC`
-        (``drivers/rig_fd.dbc``) when ``fd`` is True.
+        The DBC; default :data:`DEFAULT_DBC` (``drivers/protocol/rig.dbc``), or :data:`DEFAULT_FD_DBC`
+        (``drivers/protocol/rig_fd.dbc``) when ``fd`` is True.
     fd : bool, optional
         The frame format the caller expects (the profile's ``can.fd``); None accepts either.
 
@@ -376,7 +376,7 @@ def load_protocol(path: str | Path | None = None, *, fd: bool | None = None) -> 
     ------
     ProtocolError
         If the file is missing, does not parse, breaks the protocol's conventions (a value
-        table that names a signal's values otherwise than :mod:`drivers.protocol_values` included,
+        table that names a signal's values otherwise than :mod:`drivers.protocol.protocol_values` included,
         classic and FD messages mixed), or describes the other frame format than ``fd``.
     """
     dbc = Path(path) if path else DEFAULT_FD_DBC if fd else DEFAULT_DBC

@@ -1,6 +1,6 @@
 """The receive side's checks and decoding, compiled: one frame, or every frame one poll took off the bus.
 
-:class:`~drivers.decoder.Decoder` keeps its tables and state in the two arrays of
+:class:`~drivers.protocol.decoder.Decoder` keeps its tables and state in the two arrays of
 :class:`DecoderArrays` and decodes through :func:`decode_frame` (one frame, any bus) or
 :func:`receive_datagrams` (every datagram waiting on a ``seqpacket`` socket, taken off it and
 decoded in one call: the tick's path; :func:`decode_datagrams` decodes datagrams already taken).
@@ -9,15 +9,15 @@ All run the same checks in the same order, so there is one definition of them:
 1. an identifier of the protocol (11-bit, a message this node receives): else ``UNKNOWN_ID``;
 2. a data frame in the message's format (classic or CAN FD): else ``NOT_DATA``;
 3. the DBC's length: else ``WRONG_LENGTH``;
-4. the profile-2 CRC in byte 0 (:mod:`drivers.e2e`): else ``BAD_CRC``;
+4. the profile-2 CRC in byte 0 (:mod:`drivers.protocol.e2e`): else ``BAD_CRC``;
 5. the rolling counter in the low nibble of byte 1 advanced by one: else ``REPEATED_COUNTER``
    (state kept) or ``SKIPPED_COUNTER`` (state resynchronised); the first frame after a reset passes;
 6. every signal inside the DBC's range (raw integers within ``[raw_min, raw_max]``, floats within
    ``[minimum, maximum]``, NaN never): else ``OUT_OF_RANGE``.
 
 A frame that passes them all replaces the message's latest values. The status codes are
-:class:`~drivers.decoder.RxStatus`'s values. Signals are unpacked as
-:meth:`drivers.codec.MessageCodec.unpack` does (Intel byte order, sign, scale and offset,
+:class:`~drivers.protocol.decoder.RxStatus`'s values. Signals are unpacked as
+:meth:`drivers.protocol.codec.MessageCodec.unpack` does (Intel byte order, sign, scale and offset,
 32-bit floats), which calls :func:`unpack_signals` with the codec's plan; the codec's tests
 check it bit for bit against cantools.
 
@@ -38,9 +38,9 @@ import numba
 import numpy as np
 from numba import types
 
-from drivers.e2e import COUNTER_MODULO, CRC8_2F_INIT, CRC8_2F_XOROUT, crc_table
+from drivers.protocol.e2e import COUNTER_MODULO, CRC8_2F_INIT, CRC8_2F_XOROUT, crc_table
 
-# RxStatus values (drivers.decoder imports this module; the enum is checked against them there)
+# RxStatus values (drivers.protocol.decoder imports this module; the enum is checked against them there)
 OK, UNKNOWN_ID, WRONG_LENGTH, BAD_CRC, REPEATED_COUNTER, SKIPPED_COUNTER, OUT_OF_RANGE, NOT_DATA = range(8)
 #: Status of a frame the batch kernel leaves to the caller: an error frame or one on a foreign ID (never decoded).
 NOT_DECODED = -1
@@ -53,11 +53,11 @@ PLAN_COLUMNS = 10
 #: Highest 11-bit identifier.
 MAX_STANDARD_ID = 0x7FF
 
-# frame flags (drivers.frame_flags; repeated as literals so the kernels see constants)
+# frame flags (drivers.protocol.frame_flags; repeated as literals so the kernels see constants)
 _EXTENDED, _REMOTE, _ERROR, _FD = 0x01, 0x02, 0x04, 0x08
-#: The ``seqpacket`` datagram's header (drivers.seqpacket.wire.HEADER, ``<IBB``): ID, flags, DLC.
+#: The ``seqpacket`` datagram's header (drivers.protocol.datagram.HEADER, ``<IBB``): ID, flags, DLC.
 HEADER_BYTES = 6
-#: Largest valid datagram (bytes; drivers.seqpacket.wire.MAX_DATAGRAM_BYTES): the header and 64 data bytes.
+#: Largest valid datagram (bytes; drivers.protocol.datagram.MAX_DATAGRAM_BYTES): the header and 64 data bytes.
 MAX_DATAGRAM_BYTES = HEADER_BYTES + 64
 _ID_AT, _FLAGS_AT = 0, 4
 
@@ -73,7 +73,7 @@ CAPPED, EMPTY, END_OF_FILE = 1, -errno.EAGAIN, 0
 
 
 def signal_plan(signals: object) -> np.ndarray:
-    """The plan of a message's payload signals (:class:`~drivers.codec.SignalLayout` sequence): one row each.
+    """The plan of a message's payload signals (:class:`~drivers.protocol.codec.SignalLayout` sequence): one row each.
 
     Columns :data:`P_START` ... :data:`P_MAX` (bits, 0/1 flags, the DBC's scale and offset, the
     raw integer range and the physical range). Every value is exact in a float64 (raw fields are
@@ -88,7 +88,7 @@ def signal_plan(signals: object) -> np.ndarray:
 
 @numba.njit(cache=True)
 def crc_profile2(data: np.ndarray, offset: int, length: int, data_ids: np.ndarray, table: np.ndarray) -> int:
-    """CRC-8/2F of payload bytes 1..length-1 then the counter's Data-ID (:func:`drivers.e2e.profile2_crc`)."""
+    """CRC-8/2F of payload bytes 1..length-1 then the counter's Data-ID (:func:`drivers.protocol.e2e.profile2_crc`)."""
     crc = CRC8_2F_INIT
     for index in range(1, length):
         crc = table[crc ^ data[offset + index]]
@@ -239,7 +239,7 @@ def _decode(
 
 @numba.njit(cache=True)
 def decode_frame(frame_id: int, flags: int, data: np.ndarray, ints: np.ndarray, floats: np.ndarray) -> tuple[int, int]:
-    """Check and decode one frame (payload ``data``, flags of :mod:`drivers.frame_flags`); ``(status, slot)``.
+    """Check and decode one frame (payload ``data``, flags of :mod:`drivers.protocol.frame_flags`); ``(status, slot)``.
 
     Its unpacked values are left in the ``out`` region of ``floats`` (:attr:`DecoderArrays.out`).
     """
@@ -289,7 +289,7 @@ def receive_datagrams(
     :func:`decode_datagrams` over the rows filled. Returns ``(frames, end, malformed)``: the rows
     filled; how the receiving ended (:data:`CAPPED`, :data:`EMPTY`, :data:`END_OF_FILE`, or
     ``-errno`` of a failed ``recv``, which the caller hands to the bus's own path to judge); and the
-    datagrams of a size no frame has, skipped (as :meth:`~drivers.seqpacket.bus.SeqPacketBus.recv_datagram`
+    datagrams of a size no frame has, skipped (as :meth:`~drivers.transports.seqpacket.bus.SeqPacketBus.recv_datagram`
     skips them).
     """
     frames = 0

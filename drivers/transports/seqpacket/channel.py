@@ -11,7 +11,7 @@ channel is then refused, not joined). A channel containing ``/`` is a filesystem
 directory that must be owned by this user (or root) and not writable by others
 (:func:`check_directory`); a stale socket file there (connect refused) is unlinked before
 binding, and the hub unlinks the file it created on shutdown
-(:class:`drivers.seqpacket.bus.SeqPacketBus`).
+(:class:`drivers.transports.seqpacket.bus.SeqPacketBus`).
 """
 
 from __future__ import annotations

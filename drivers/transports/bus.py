@@ -20,8 +20,8 @@ from typing import Any
 
 import can
 
-from drivers import seqpacket
 from drivers.errors import BusError
+from drivers.transports import seqpacket
 
 SYS_NET = Path("/sys/class/net")
 WITH_VCAN_HINT = "this project's scripts/with-vcan runs the tests inside User-Mode Linux, which has SocketCAN"

@@ -1,6 +1,6 @@
 """The ``seqpacket`` bus: a CAN bus between the processes of one host over Unix ``SOCK_SEQPACKET`` sockets.
 
-Interface name ``seqpacket`` (:mod:`drivers.seqpacket`). Two or more processes that
+Interface name ``seqpacket`` (:mod:`drivers.transports.seqpacket`). Two or more processes that
 open the same channel share a broadcast "CAN bus" with no set-up: no root, no kernel
 module, no daemon. The default dry run uses it to run the virtual rig in its own process
 while the harness loop (500 Hz, soft real time) and the rig both talk python-can's Bus API.
@@ -43,7 +43,7 @@ rejected frames (python-can's generic loop would return None at the first one).
 
 Sends never block (``MSG_DONTWAIT``): a peer whose socket buffer is full makes
 ``send`` raise :class:`can.CanOperationError` "Transmit buffer full" with
-``error_code = errno.ENOBUFS`` (:func:`drivers.bus.is_queue_full` counts it). The kernel
+``error_code = errno.ENOBUFS`` (:func:`drivers.transports.bus.is_queue_full` counts it). The kernel
 charges each queued frame ~768 bytes (skb truesize) to the sender's ``SO_SNDBUF``; the
 buffer asked for (:data:`SOCKET_BUFFER_BYTES`, which the kernel doubles) holds ~2700
 frames, over 1 s at 2500 frames/s, where ``net.core.wmem_max`` allows it (a warning is
@@ -59,8 +59,8 @@ a node that connected to a hub it refuses closes the connection and raises :clas
 (when opening; later it stays alone and retries). Plain channel names live in this user's private
 directory, so no other user can bind one first (:mod:`.channel`).
 
-Channels are :mod:`drivers.seqpacket.channel`'s, the datagram of a frame is
-:mod:`drivers.seqpacket.wire`'s.
+Channels are :mod:`drivers.transports.seqpacket.channel`'s, the datagram of a frame is
+:mod:`drivers.protocol.datagram`'s.
 """
 
 from __future__ import annotations
@@ -82,9 +82,9 @@ import can
 from can import BusABC, CanOperationError, CanProtocol, Message
 
 from drivers.errors import BusError
-from drivers.seqpacket.channel import ABSTRACT_PREFIX, check_directory, ensure_private_directory, parse_channel
-from drivers.seqpacket.peers import PeerCredentials, PeerPolicy, describe_refusal
-from drivers.seqpacket.wire import HEADER, MAX_DATAGRAM_BYTES, decode_frame, encode_frame
+from drivers.protocol.datagram import HEADER, MAX_DATAGRAM_BYTES, decode_frame, encode_frame
+from drivers.transports.seqpacket.channel import ABSTRACT_PREFIX, check_directory, ensure_private_directory, parse_channel
+from drivers.transports.seqpacket.peers import PeerCredentials, PeerPolicy, describe_refusal
 
 LOG = logging.getLogger(__name__)
 
@@ -158,6 +158,11 @@ class SeqPacketBus(BusABC):
     -----
     One thread receives; ``send`` may run in another (python-can's ``send_periodic``):
     connections are swapped as whole tuples under a lock, never changed in place.
+
+    The bus offers the datagram path (:class:`~drivers.transports.datagram_path.DatagramPath`:
+    :meth:`send_datagram`, :meth:`recv_datagram`, :attr:`raw_receive_ok`, :attr:`direct_fd`,
+    :meth:`note_direct_receive`), which the generic reader and writer use in place of
+    :class:`can.Message` objects.
     """
 
     def __init__(
@@ -267,7 +272,7 @@ class SeqPacketBus(BusABC):
             self._own.append(self._echo(msg))
 
     def send_datagram(self, frame: bytes | bytearray | memoryview) -> None:
-        """Send one frame already in the wire format (:mod:`.wire`) to every other node; never blocks.
+        """Send one frame already in the wire format (:mod:`drivers.protocol.datagram`) to every other node; never blocks.
 
         The writer's path without a :class:`can.Message` (:class:`drivers.writer.FrameWriter` keeps each
         frame's datagram and rewrites its data in place). Never echoed locally.
@@ -357,7 +362,7 @@ class SeqPacketBus(BusABC):
 
         That is when this node has exactly one connection (nothing to relay, no round robin); the
         caller checks :attr:`raw_receive_ok` first. The reader then takes them with its compiled receive
-        (:meth:`drivers.decoder.Decoder.receive_datagrams`) and calls :meth:`note_direct_receive` after.
+        (:meth:`drivers.protocol.decoder.Decoder.receive_datagrams`) and calls :meth:`note_direct_receive` after.
         """
         peers = self._peers
         if len(peers) != 1 or self._closed:
@@ -380,14 +385,14 @@ class SeqPacketBus(BusABC):
 
         Never blocks and builds no :class:`can.Message`: the reader's path
         (:meth:`drivers.reader.FrameReader.poll`) when :attr:`raw_receive_ok`. The datagram is
-        :data:`.wire.HEADER` then the data, checked for size (a malformed one is counted in
+        :data:`drivers.protocol.datagram.HEADER` then the data, checked for size (a malformed one is counted in
         :attr:`malformed_frames` and skipped); the hub relays it as :meth:`recv` does. Filters
         and local echoes are not applied here.
 
         Parameters
         ----------
         into : writable bytes-like, optional
-            At least :data:`.wire.MAX_DATAGRAM_BYTES` + 1 bytes; default the bus's own buffer.
+            At least :data:`drivers.protocol.datagram.MAX_DATAGRAM_BYTES` + 1 bytes; default the bus's own buffer.
 
         Raises
         ------

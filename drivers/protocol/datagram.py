@@ -1,8 +1,14 @@
-"""The ``seqpacket`` interface's wire format: one datagram per CAN frame.
+"""One CAN frame in one datagram: the layout of the datagram path and of the ``seqpacket`` interface's wire.
 
-:data:`HEADER` (``<IBB``: arbitration ID, flags of :mod:`drivers.frame_flags`, DLC) followed by
+:data:`HEADER` (``<IBB``: arbitration ID, flags of :mod:`drivers.protocol.frame_flags`, DLC) followed by
 the data (at most 64 bytes), one datagram per frame. The receiver stamps ``timestamp = time.time()`` on arrival
 (the same wall clock as the sender's, so the two compare).
+
+Three parts read or write it, so it lives with the protocol's other frame encoding (the flags): the
+compiled receive of :mod:`drivers.protocol.frame_kernel` (its ``HEADER_BYTES`` and ``MAX_DATAGRAM_BYTES``,
+which :mod:`drivers.protocol.decoder` checks against these), a bus that offers the datagram path
+(:class:`~drivers.transports.datagram_path.DatagramPath`: the reader and writer hand it frames in this
+layout), and the ``seqpacket`` interface (:mod:`drivers.transports.seqpacket`), whose wire it is.
 """
 
 from __future__ import annotations
@@ -12,9 +18,9 @@ import time
 
 from can import Message
 
-from drivers.frame_flags import BRS, ERROR, ESI, EXTENDED, FD, REMOTE, flags_of
+from drivers.protocol.frame_flags import BRS, ERROR, ESI, EXTENDED, FD, REMOTE, flags_of
 
-#: Frame header: arbitration ID, flags (:mod:`drivers.frame_flags`, never ``RX``), DLC; the data follows.
+#: Frame header: arbitration ID, flags (:mod:`drivers.protocol.frame_flags`, never ``RX``), DLC; the data follows.
 HEADER = struct.Struct("<IBB")
 #: Largest data field (bytes; CAN FD).
 MAX_DATA_BYTES = 64
