@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from harness.control import designs, factory
+from harness.control import factory
 from harness.control.estimator import FrictionEstimator
 from harness.control.factory import build_controller_for_rig
 from harness.motions import load_motion
@@ -72,7 +72,7 @@ def test_the_twin_integrates_the_truth_while_its_controller_and_estimator_keep_t
 
 def test_simulate_applies_the_truth_with_rig_effects_only(monkeypatch):
     built: list = []
-    original = designs.build_controller
+    original = factory.build_controller
 
     def recording(name, design, design_building):
         built.append(design_building)

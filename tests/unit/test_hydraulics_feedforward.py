@@ -16,12 +16,8 @@ import pytest
 
 from harness.hydraulics import config as hydraulics_config
 from harness.hydraulics import cylinder as hy
-from harness.hydraulics.servo_controller import (
-    StrokeLvdtConfig,
-    StrokeVelocityFeedforward,
-    VelocityFeedforwardConfig,
-    steady_bleed_N,
-)
+from harness.hydraulics.config import StrokeLvdtConfig, VelocityFeedforwardConfig
+from harness.hydraulics.servo_controller import StrokeVelocityFeedforward, steady_bleed_N
 from harness.model.plant import Plant, TableMotion
 from tests.unit.test_hydraulics import ACTUATOR, CYLINDER, FRICTIONLESS, IMMOVABLE  # the same known plant
 
