@@ -12,8 +12,11 @@ prints a markdown table: covered seeds, the mean error and the mean stated half-
 With ``--bearing``, the README's bearing step instead: ``harness dry-run --lockstep --duration S
 --set record.seed=SEED`` (the default synthetic record, its seed varied: the base mat slides), then
 ``harness identify bearing`` on its run folder, against the shipped bearing (``mu_max``,
-``mu_delta``, ``a_mu``, ``D_y``). Its intervals are value -/+ 1.96 standard errors (its errors
-are the larger of the Jacobian's and the blocks' over 8 stretches of the record).
+``mu_delta``, ``a_mu``, ``D_y``). Its intervals are value -/+ 1.96 standard errors (the values
+SIMEX-corrected for the sensors' noise in the fit's input; their errors the plain fit's, the larger
+of the Jacobian's and the blocks' over 8 stretches of the record, combined with the
+extrapolation's Monte Carlo error). Run folders already in ``--out`` are identified again
+without a new dry run.
 
 Usage: python benchmarks/identify_coverage.py [--bearing] [--seeds N] [--duration S] [--workers W] [--out DIR]
 """

@@ -108,8 +108,10 @@ def sliding_record(run: RunData, building: BuildingConfig) -> ff.SlidingRecord:
     actuator = signals[actuator_force_column(run)]
     others = friction_from_balance(building, np.zeros_like(actuator), signals[layout.SLIDING_DISPLACEMENT],
                                    signals[layout.BASE_ACCELERATION], floors)
-    displacement = ff.fused_displacement(signals[layout.SLIDING_DISPLACEMENT], signals[layout.SLIDING_VELOCITY], rate_hz)
-    return ff.SlidingRecord(run.path.name, rate_hz, displacement, signals[layout.SLIDING_VELOCITY], actuator, others)
+    measured = signals[layout.SLIDING_DISPLACEMENT]
+    displacement = ff.fused_displacement(measured, signals[layout.SLIDING_VELOCITY], rate_hz)
+    return ff.SlidingRecord(run.path.name, rate_hz, displacement, signals[layout.SLIDING_VELOCITY], actuator, others,
+                            measured)
 
 
 def overlay_values(fit: ff.FrictionFit) -> list[OverlayValue]:
@@ -160,13 +162,16 @@ def identify_bearing(paths: Sequence[Path | str], out_dir: Path, lowpass_hz: flo
         "determined": list(fit.determined),
         "held_at_profile": {"alpha": design.alpha, "beta": design.beta, "gamma": design.gamma, "eta": design.eta},
         "note": fit.note or None,
+        "simex": fit.simex.as_dict() if fit.simex else None,
         "fit": {
             "rms_error_N": fit.rms_error_N, "peak_friction_N": fit.peak_friction_N,
             "relative_rms_error": fit.relative_rms_error, "correlation_samples": fit.correlation_samples,
             "load_cell_delay_s": fit.delay_s, "load_cell_delay_se_s": fit.delay_se_s,
             "evaluations": fit.evaluations, "lowpass_hz": lowpass_hz, "crossover_hz": ff.CROSSOVER_HZ,
-            "method": "scipy.optimize.least_squares (trf), standard errors from the Jacobian, inflated by the "
-                      "residuals' correlation time",
+            "method": "scipy.optimize.least_squares (trf), standard errors the larger of the Jacobian's (inflated by "
+                      "the residuals' correlation time) and a block sandwich's"
+                      + ("; the values SIMEX-corrected for the displacement and velocity sensors' noise (quadratic "
+                         "extrapolant, standard error the plain fit's and the extrapolation's combined)" if fit.simex else ""),
         },
         "force_balance": {
             "total_weight_N": building.total_weight_N, "base_mass_kg": building.base_mass_kg,
