@@ -168,17 +168,26 @@ DRIVER_LAYERS = {
 DRIVER_LOOSE_MODULES = ("__init__.py", "errors.py", "link.py", "measurements.py", "reader.py", "rig_reader.py", "writer.py")
 
 
+def imports_leaving(graph: dict[str, set[str]], layers: dict[str, tuple[str, ...]], scope: str,
+                    ignored: tuple[str, ...] = ()) -> list[str]:
+    """``"module -> dep"`` for each import by a module of a layer of ``scope`` (a top package) that its layer does not allow.
+
+    ``layers`` maps a layer to the layers its modules may import; ``ignored`` names modules any may import.
+    """
+    return sorted(
+        f"{module} -> {dep}"
+        for module, deps in graph.items()
+        for layer, allowed in layers.items()
+        if _in(module, layer)
+        for dep in deps
+        if _in(dep, scope) and dep not in ignored and not any(_in(dep, a) for a in allowed)
+    )
+
+
 def test_the_protocol_knows_no_transport_and_the_transports_no_role() -> None:
     graph = project_imports()
     assert all(any(_in(module, layer) for module in graph) for layer in DRIVER_LAYERS), "a driver layer without modules"
-    upward = sorted(
-        f"{module} -> {dep}"
-        for module, deps in graph.items()
-        for layer, allowed in DRIVER_LAYERS.items()
-        if _in(module, layer)
-        for dep in deps
-        if _in(dep, "drivers") and dep != "drivers" and not any(_in(dep, a) for a in allowed)
-    )
+    upward = imports_leaving(graph, DRIVER_LAYERS, "drivers", ignored=("drivers",))
     assert not upward, f"driver imports from the protocol to a transport or a role, or from a transport to a role: {upward}"
 
 
@@ -386,14 +395,7 @@ def test_imports_run_from_the_commands_down() -> None:
 def test_the_lower_layers_import_only_what_lies_below_them() -> None:
     graph = project_imports(type_checking=False)
     assert all(any(_in(module, layer) for module in graph) for layer in LOWER_LAYERS), "a layer without modules"
-    upward = sorted(
-        f"{module} -> {dep}"
-        for module, deps in graph.items()
-        for layer, allowed in LOWER_LAYERS.items()
-        if _in(module, layer)
-        for dep in deps
-        if _in(dep, "harness") and not any(_in(dep, a) for a in allowed)
-    )
+    upward = imports_leaving(graph, LOWER_LAYERS, "harness")
     assert not upward, f"imports that run upward from the foundation or CAN: {upward}"
 
 
