@@ -166,6 +166,10 @@ class VirtualRig:
         self.start_refused = False
         self.force_N = 0.0
         self._t0: float | None = None
+        #: When the real-time service last ran (s, wall clock); None before the first.
+        self._last_service_s: float | None = None
+        #: Real-time services that came two sensor periods or more after the one before (the rig's own stalls).
+        self.own_stalls = 0
         self._announce = self.lockstep
         self._last_drive_state = DriveState.OFF
         self._last_status_time = -math.inf
@@ -424,8 +428,11 @@ class VirtualRig:
             Frames handled.
         """
         with self._lock:
+            judged_late = False  # after the rig's own stall, the watchdog judges once the frames are read
             if not self.lockstep:
-                self._update_drive(now)
+                judged_at = self._watched_until(now)
+                self._update_drive(judged_at)
+                judged_late, judged = judged_at != now, self.drive.state
                 self._advance_to(now)
             handled = 0
             kind = self.reader.receive(wait_s)
@@ -437,8 +444,28 @@ class VirtualRig:
             if wait_s:
                 now = self.clock()
             self._after_frames(now)
+            if judged_late and self.drive.state != judged:
+                self._publish_status(now)  # judged late (after the rig's own stall): announced at once
             self._watch()
             return handled
+
+    def _watched_until(self, now: float) -> float:
+        """The latest time (s) the drive's watchdog may judge before this service reads its frames.
+
+        The drive it emulates never stalls; this process can (a busy host, an emulator's stopped
+        virtual CPU). After a gap of two sensor periods or more between services (a stall, as the
+        loop counts one: :mod:`harness.signals.timing_counts`), the heartbeats and commands that
+        arrived meanwhile still wait unread: judged at ``now`` before them, the watchdog would
+        latch HEARTBEAT_WATCHDOG on a harness that kept sending. It then judges only up to the
+        previous service (the last moment it watched) and again at ``now`` once the frames are
+        read (:meth:`_after_frames`), so a harness that really went silent still trips it in this
+        service; the sub-steps of the stall run with the drive as last judged.
+        """
+        last, self._last_service_s = self._last_service_s, now
+        if last is None or now - last < 2.0 * self.schedule.sensor_period_s:
+            return now
+        self.own_stalls += 1
+        return last
 
     def _advance_to(self, now: float) -> None:
         """Sub-steps up to ``now``, then what is due, once (after a stall: no burst of old values)."""

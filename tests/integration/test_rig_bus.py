@@ -289,6 +289,39 @@ def test_watchdog_trips_when_commands_stop(bench):
     assert b.rig.state.drive_state == DriveState.READY, "reset clears the latch"
 
 
+def _ready_in_real_time(bench) -> Bench:
+    """A real-time rig whose drive is READY on the harness's heartbeats (0.5 s watchdog)."""
+    b = bench(quiet_config(drive=DriveConfig(watchdog_timeout_s=0.5)), lockstep=False)
+    for _ in range(5):
+        b.writer.heartbeat(1, b.now)
+        b.service(b.rig.schedule.sensor_period_s)
+    assert b.rig.state.drive_state == DriveState.READY and b.rig.own_stalls == 0
+    return b
+
+
+def test_a_stall_of_the_rig_itself_is_not_a_silent_harness(bench):
+    """CI in User-Mode Linux: the rig's process stopped 0.6 s while the harness's heartbeats queued up.
+
+    The drive it emulates never stalls: the heartbeats that waited unread keep it READY.
+    """
+    b = _ready_in_real_time(bench)
+    for _ in range(12):  # the harness goes on at 20 Hz; the rig is not serviced for 0.6 s
+        b.now += 0.05
+        b.writer.heartbeat(1, b.now)
+    b.service(0.0)
+    assert b.rig.state.drive_state == DriveState.READY and b.rig.own_stalls == 1
+    b.service(b.rig.schedule.sensor_period_s)
+    assert b.rig.state.drive_state == DriveState.READY and b.rig.own_stalls == 1, "on schedule again"
+
+
+def test_a_harness_silent_through_the_rigs_stall_still_trips_the_watchdog_in_that_service(bench):
+    b = _ready_in_real_time(bench)
+    b.service(0.6)  # nothing arrived while the rig stalled: the harness really stopped
+    assert b.rig.state.drive_state == DriveState.FAULT and b.rig.state.fault_code == FaultCode.HEARTBEAT_WATCHDOG
+    assert b.rig.own_stalls == 1
+    assert b.reader.drive_state == DriveState.FAULT, "announced in the same service"
+
+
 def test_lockstep_watchdog_runs_on_the_wall_clock(bench):
     b = bench(quiet_config(drive=DriveConfig(watchdog_timeout_s=0.05, lockstep_watchdog_timeout_s=1.0)))
     b.start()
