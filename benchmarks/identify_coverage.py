@@ -18,12 +18,21 @@ of the Jacobian's and the blocks' over 8 stretches of the record, combined with 
 extrapolation's Monte Carlo error). Run folders already in ``--out`` are identified again
 without a new dry run.
 
-Usage: python benchmarks/identify_coverage.py [--bearing] [--seeds N] [--duration S] [--workers W] [--out DIR]
+With ``--actuator``, the README's actuator step: ``harness identify actuator --both --duration S
+--set rig.seed=SEED`` (lockstep, the default chirp over 1-30 Hz, free and blocked; the seed varies
+the sensors' noise), against the shipped actuator as its linearised model states it
+(:class:`~harness.identification.actuator_fit.ActuatorParameters` from the profile, the delay the
+loop's share plus the actuator's): every value the fit frees. Intervals: as the structure's,
+value -/+ t (7 degrees of freedom, 2.36) standard errors, as ``identification.json`` states them. Folders already in ``--out`` are fitted again
+without new runs.
+
+Usage: python benchmarks/identify_coverage.py [--bearing | --actuator] [--seeds N] [--duration S] [--workers W] [--out DIR]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
@@ -35,6 +44,8 @@ sys.path.insert(0, str(REPO))
 import numpy as np  # noqa: E402
 
 from harness.cli import main  # noqa: E402
+from harness.identification.actuator import identify_actuator_fit, loop_delay_s  # noqa: E402
+from harness.identification.actuator_fit import FITTED, ActuatorParameters  # noqa: E402
 from harness.identification.bearing import identify_bearing  # noqa: E402
 from harness.identification.fit_statistics import t_factor_95  # noqa: E402
 from harness.identification.friction_fit import PARAMETERS  # noqa: E402
@@ -79,6 +90,31 @@ def one_bearing_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, flo
             for label, name in zip(BEARING_LABELS, PARAMETERS, strict=True)}
 
 
+def actuator_truth() -> dict[str, float]:
+    """The shipped actuator as the fit's model states it (no ``rig.truth``): what the fit should find."""
+    profile = load_profile()
+    truth = ActuatorParameters.from_config(
+        profile.rig.actuator.hydraulics, profile.rig.actuator.delay_s + loop_delay_s(profile, lockstep=True),
+        profile.rig.sensors.velocity.delay_s, profile.rig.physics_substep_s,
+    )
+    return {name: float(getattr(truth, name)) for name in FITTED}
+
+
+def one_actuator_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, float]]:
+    """(identified, standard error) per value the actuator fit freed, for one seed of the sensors' noise."""
+    seed, duration_s, out = job
+    folder = out / f"actuator{seed}"
+    if not (folder / "excitation.json").is_file():
+        status = main(["identify", "actuator", "--both", "--quiet", "--yes", "--out", str(folder), "--force",
+                       "--duration", f"{duration_s:g}", "--set", f"rig.seed={seed}"])
+        if status != 0:
+            raise SystemExit(f"seed {seed}: identify actuator ended with exit status {status}")
+    else:  # fitted again on the responses measured before (a changed fit, the same data)
+        identify_actuator_fit(folder, load_profile(), lockstep=True)
+    parameters = json.loads((folder / "identification.json").read_text(encoding="utf-8"))["parameters"]
+    return {name: (float(p["value"]), float(p["standard_error"])) for name, p in parameters.items() if p["fitted"]}
+
+
 def one_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, float]]:
     """(identified, standard error) per value for one seed."""
     seed, duration_s, out = job
@@ -106,6 +142,8 @@ def table(results: list[dict[str, tuple[float, float]]], truths: dict[str, float
     lines = [f"| value | truth | covered (of {len(results)}) | mean error | largest error | mean stated 95 % half-width |",
              "|---|---:|---:|---:|---:|---:|"]
     for name, true in truths.items():
+        if any(name not in r for r in results):  # held, not fitted
+            continue
         found = np.array([r[name][0] for r in results])
         half = t * np.array([r[name][1] for r in results])
         covered = int(np.count_nonzero(np.abs(found - true) <= half))
@@ -121,9 +159,19 @@ def run(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=30.0, help="white-noise dry run length (s)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=None, help="where the run folders go (default: temp)")
-    parser.add_argument("--bearing", action="store_true", help="the bearing step (synthetic record) instead")
+    step = parser.add_mutually_exclusive_group()
+    step.add_argument("--bearing", action="store_true", help="the bearing step (synthetic record) instead")
+    step.add_argument("--actuator", action="store_true",
+                      help="the actuator step (identify actuator --both; --duration is the chirp's) instead")
     args = parser.parse_args(argv)
     out = args.out or Path(tempfile.mkdtemp(prefix="identify-coverage-"))
+    if args.actuator:
+        with ProcessPoolExecutor(args.workers) as pool:
+            results = list(pool.map(one_actuator_seed, [(seed, args.duration, out) for seed in range(args.seeds)]))
+        print(table(results, actuator_truth()))
+        print(f"\n{args.seeds} seeds of the sensors' noise, identify actuator --both with {args.duration:g} s chirps "
+              f"(lockstep); folders in {out}")
+        return 0
     if args.bearing:
         with ProcessPoolExecutor(args.workers) as pool:
             results = list(pool.map(one_bearing_seed, [(seed, args.duration, out) for seed in range(args.seeds)]))

@@ -21,8 +21,10 @@ waits, then asks again.
    :data:`MAX_RUNS` runs in all;
 3. returns the first run the pre-flight let through, whatever its outcome: a trip or any other
    failure is the test's to judge, never retried; the one exception, asked for by a test whose host is
-   an emulator (``retry_host_stalls``: the vcan stage in User-Mode Linux), is a ``loop_stall`` trip on a
-   stall the loop spent waiting for its deadline, which the emulator made (:func:`host_stall_trip`);
+   an emulator (``retry_host_stalls``: the vcan stage in User-Mode Linux), is a trip on a stall the emulator
+   made: ``loop_stall`` on a stall the loop spent waiting for its deadline (:func:`host_stall_trip`), or
+   ``sensor_stale`` where the run's own ``can.log`` shows the rig's process stopped sending while the
+   loop went on sending its commands (:func:`rig_stall_trip`);
 4. fails the test with every refusal's figures when all :data:`MAX_RUNS` were refused: this host is
    too noisy to run the test at all, and says so.
 
@@ -44,10 +46,14 @@ from pathlib import Path
 
 import pytest
 
+import numpy as np
+
+from drivers.protocol.codec import load_protocol
 from harness import exit_codes
 from harness.loop.preflight import HostTiming, measure_host_timing
 from harness.loop.timing import GAP_PART_WORDS
 from harness.realtime.host import AUTO, Scheduling, request_fifo, restore_scheduling
+from harness.replay.canlog import read_can_log
 
 #: Runs of one test at most: the first and the retries of runs the pre-flight refused.
 MAX_RUNS = 5
@@ -67,6 +73,8 @@ FIGURES = re.compile(r"host timing at .*?: refused|the loop itself stalled [^:]*
 #: the loop had nothing to do and was not run (the host, or an emulator's virtual CPU, stopped it).
 STALL_TRIP = "tripped (loop_stall)"
 WAITING_STALL = f"the loop was {GAP_PART_WORDS['wait']}"
+#: The words of a trip for sensor frames older than their limit.
+STALE_TRIP = "tripped (sensor_stale)"
 #: The name of the counts in a test report's user_properties.
 PROPERTY = "real_time_runs"
 
@@ -169,8 +177,46 @@ def host_stall_trip(done: subprocess.CompletedProcess, folders: list[Path]) -> s
     return None
 
 
+def rig_stall_trip(done: subprocess.CompletedProcess, folders: list[Path], limit_s: float) -> str | None:
+    """What ``can.log`` shows when ``done`` tripped ``sensor_stale`` because the rig's process stopped sending; else None.
+
+    Inside User-Mode Linux the rig's process, on the same one virtual CPU as the loop, is now and then not
+    run for 0.1-0.2 s while the loop goes on: its sensor frames age past the limit and the loop trips, as it
+    must. The run's ``can.log`` tells the two apart: the rig's table sensor frames (received) stop for longer
+    than ``limit_s`` while the loop's commands (sent) go on with no gap that long in the same stretch. A loop
+    that stalled itself, or a rig that stopped while the loop did too, is never this.
+    """
+    if done.returncode != exit_codes.TRIPPED or STALE_TRIP not in _output(done):
+        return None
+    protocol = load_protocol(fd=True)  # the FD protocol names both the classic table frame and the FD sensor set
+    sensor_ids = {protocol[name].frame_id for name in ("TABLE_SENSORS", "SENSOR_SET")}
+    command_id = protocol["ACTUATOR_CMD"].frame_id
+    for folder in folders:
+        log = folder / "can.log"
+        if not log.is_file():
+            continue
+        frames = read_can_log(log)
+        received = np.array([f.timestamp for f in frames if f.rx and f.arbitration_id in sensor_ids])
+        sent = np.array([f.timestamp for f in frames if not f.rx and f.arbitration_id == command_id])
+        if len(received) < 2 or len(sent) < 2:
+            continue
+        gaps = np.diff(received)
+        for k in np.flatnonzero(gaps > limit_s):
+            start, end = received[k], received[k + 1]
+            inside = np.diff(np.concatenate([[start], sent[(sent > start) & (sent < end)], [end]]))
+            if inside.max() < limit_s:
+                return (f"the rig's sensor frames stopped {gaps[k] * 1e3:.1f} ms (limit {limit_s * 1e3:.0f} ms) while "
+                        f"the loop sent {len(inside) - 1} commands, none more than {inside.max() * 1e3:.1f} ms apart")
+    return None
+
+
 def _output(done: subprocess.CompletedProcess) -> str:
     return f"{done.stdout or ''}{done.stderr or ''}"
+
+
+def _emulator_stall(done: subprocess.CompletedProcess, folders: list[Path], limit_s: float) -> str | None:
+    """A trip the emulator's stall made (:func:`host_stall_trip`, :func:`rig_stall_trip`), described; else None."""
+    return host_stall_trip(done, folders) or rig_stall_trip(done, folders, limit_s)
 
 
 def _set_aside(log_dir: Path, before: set[Path]) -> None:
@@ -205,9 +251,11 @@ def run_real_time(
     records : list
         Where the run's :class:`RealTimeRecord` goes: :data:`RECORDS`, or a test's own list.
     retry_host_stalls : bool
-        Also run again a run that tripped ``loop_stall`` on a stall the loop spent waiting for its deadline
-        (:func:`host_stall_trip`): for a test whose host is an emulator (User-Mode Linux), where such stalls are
-        the emulator's; counted and reported like the refusals, within the same :data:`MAX_RUNS`.
+        Also run again a run that tripped on a stall the emulator made: ``loop_stall`` on a stall the loop spent
+        waiting for its deadline (:func:`host_stall_trip`), or ``sensor_stale`` while the rig's process stopped
+        and the loop did not (:func:`rig_stall_trip`), with ``stall_budget_s`` as the sensors' age limit: for a
+        test whose host is an emulator (User-Mode Linux), where such stalls are the emulator's; counted and
+        reported like the refusals, within the same :data:`MAX_RUNS`.
 
     Returns
     -------
@@ -223,10 +271,11 @@ def run_real_time(
         before = set(log_dir.iterdir()) if log_dir.is_dir() else set()
         done = attempt()
         record.runs += 1
-        stall = host_stall_trip(done, sorted(set(log_dir.iterdir()) - before)) if retry_host_stalls and log_dir.is_dir() else None
+        stall = _emulator_stall(done, sorted(set(log_dir.iterdir()) - before), stall_budget_s) \
+            if retry_host_stalls and log_dir.is_dir() else None
         if stall is not None and record.runs < MAX_RUNS:
             record.host_stalls.append(stall[-300:])
-            print(f"{what}: run {record.runs} tripped on a stall the host made while the loop waited: {stall[-300:]}")
+            print(f"{what}: run {record.runs} tripped on a stall the host made: {stall[-300:]}")
             _set_aside(log_dir, before)
             continue
         if not refused_by_preflight(done):
@@ -255,8 +304,8 @@ def summary_line(records: list[dict]) -> str:
     never = sum(r["never_quiet"] for r in records)
     stalls = sum(len(r.get("host_stalls", ())) for r in records)
     return (f"real-time runs: {len(records)} asked for, {runs} started, {refused} refused by the pre-flight "
-            f"(run again, up to {MAX_RUNS} runs a test), {stalls} tripped on a stall the host made while the loop "
-            f"waited (run again where the test allows), "
+            f"(run again, up to {MAX_RUNS} runs a test), {stalls} tripped on a stall an emulator made (the loop "
+            f"waiting, or the rig's process stopped: run again where the test allows), "
             f"{waited:.0f} s spent waiting for a quiet second ({never} runs started without one)")
 
 

@@ -23,7 +23,11 @@ The fit: least squares on the complex response (real and imaginary parts of the 
 error ``(H_model - H) / |H|``), both conditions together, each bin weighted by
 ``sqrt(2 n_d gamma^2 / (1 - gamma^2))``, the inverse of the H1 estimate's relative standard
 deviation (Bendat & Piersol) with ``n_d`` the Welch segments, ``gamma^2`` capped at
-:data:`COHERENCE_CAP`. Standard errors come from the Jacobian (:mod:`.fit_statistics`).
+:data:`COHERENCE_CAP`. Standard errors are the larger of the Jacobian's (the residuals'
+correlation across neighbouring bins in) and the data's own: the sandwich over
+:data:`~.fit_statistics.BLOCKS` consecutive stretches of the band, both conditions' bins of a
+stretch together (the chirp sweeps the band in time, so a stretch of the band is a stretch of
+the run); :func:`.fit_statistics.honest_standard_errors`, as the structure and bearing fits do.
 
 Which groups the data determine (:data:`FITTED`, :data:`HELD`): the force loop's gain
 ``w_f`` (the blocked response's bandwidth), the valve's natural frequency ``w_v`` (inside
@@ -48,7 +52,13 @@ from scipy import optimize
 
 from harness.hydraulics import linear
 from harness.hydraulics.config import HydraulicActuatorConfig
-from harness.identification.fit_statistics import covariance, relative_error
+from harness.identification.fit_statistics import (
+    correlation_time,
+    covariance,
+    honest_standard_errors,
+    relative_error,
+    time_blocks,
+)
 from harness.identification.frf import FrequencyResponse
 
 #: The measured response from the command to the sliding velocity, free condition (m/s per N).
@@ -354,7 +364,7 @@ def fit_actuator(measured: Measured, start: ActuatorParameters, hold: tuple[str,
         lambda x: _residuals(params(x), measured), np.ones(len(names)), bounds=(1e-3, 1e3), x_scale="jac", method="trf",
     )
     best = params(solution.x)
-    cov = covariance(solution.jac, solution.fun) * np.outer(scale, scale)
+    cov = _honest_covariance(solution.jac, solution.fun, _band_blocks(measured)) * np.outer(scale, scale)
     errors = {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(names)}
     conditions = []
     if measured.blocked is not None:
@@ -363,6 +373,22 @@ def fit_actuator(measured: Measured, start: ActuatorParameters, hold: tuple[str,
         model = free_response(best, measured.free.freq_hz, complex_response(measured.velocity))
         conditions.append(condition_error("free", model, measured.free))
     return ActuatorFit(best, errors, tuple(names), tuple(conditions), _valve_correlation(best, measured), covariance=cov)
+
+
+def _band_blocks(measured: Measured) -> np.ndarray:
+    """The stretch of the band (0 .. BLOCKS - 1) of each residual of :func:`_residuals`, in its layout."""
+    conditions = [r for r in (measured.blocked, measured.free if measured.velocity is not None else None) if r is not None]
+    blocks = np.concatenate([time_blocks(len(response.freq_hz)) for response in conditions])
+    return np.concatenate([blocks, blocks])  # real parts, then imaginary parts
+
+
+def _honest_covariance(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """The fit's covariance with each variance the larger of the Jacobian's and the blocks' (their correlations the Jacobian's)."""
+    model = covariance(jacobian, residuals, correlation_time(residuals))
+    errors = honest_standard_errors(jacobian, residuals, blocks)
+    model_errors = np.sqrt(np.maximum(np.diag(model), 0.0))
+    ratio = np.divide(errors, model_errors, out=np.ones_like(errors), where=model_errors > 0)
+    return model * np.outer(ratio, ratio)
 
 
 def _valve_correlation(p: ActuatorParameters, measured: Measured) -> float:

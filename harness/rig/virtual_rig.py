@@ -168,6 +168,9 @@ class VirtualRig:
         self._t0: float | None = None
         #: When the real-time service last ran (s, wall clock); None before the first.
         self._last_service_s: float | None = None
+        #: The latest time the drive's watchdog may judge now (s): the previous service while this one reads
+        #: the frames that waited through the rig's own stall (:meth:`_watched_until`), else infinite.
+        self._watched_to_s = math.inf
         #: Real-time services that came two sensor periods or more after the one before (the rig's own stalls).
         self.own_stalls = 0
         self._announce = self.lockstep
@@ -219,7 +222,7 @@ class VirtualRig:
             self.drive.on_estop()
         drive = self.config.drive
         self.drive.timeout_s = drive.lockstep_watchdog_timeout_s if self.lockstep else drive.watchdog_timeout_s
-        self.drive.update(now, self.pressure_ok, self._injected_drive_code())
+        self.drive.update(min(now, self._watched_to_s), self.pressure_ok, self._injected_drive_code())
 
     def _estop_asserted(self, now: float) -> bool:
         """An E-stop is asserted now: the rig's E-stop fault, the panel pressed, or an active ESTOP frame lately.
@@ -333,6 +336,7 @@ class VirtualRig:
             self.lockstep = bool(lockstep)
             self.step_index = 0
             self._t0 = None
+            self._last_service_s = None  # real time starts watching afresh
         command = int(command)
         if command == RigCommand.RESET:
             self._reset_rig()
@@ -428,11 +432,11 @@ class VirtualRig:
             Frames handled.
         """
         with self._lock:
-            judged_late = False  # after the rig's own stall, the watchdog judges once the frames are read
+            judged = self.drive.state
             if not self.lockstep:
-                judged_at = self._watched_until(now)
-                self._update_drive(judged_at)
-                judged_late, judged = judged_at != now, self.drive.state
+                self._watched_to_s = self._watched_until(now)
+                self._update_drive(now)
+                judged = self.drive.state
                 self._advance_to(now)
             handled = 0
             kind = self.reader.receive(wait_s)
@@ -443,6 +447,7 @@ class VirtualRig:
                 kind = self.reader.receive(0.0)
             if wait_s:
                 now = self.clock()
+            judged_late, self._watched_to_s = self._watched_to_s < now, math.inf
             self._after_frames(now)
             if judged_late and self.drive.state != judged:
                 self._publish_status(now)  # judged late (after the rig's own stall): announced at once
@@ -455,10 +460,11 @@ class VirtualRig:
         The drive it emulates never stalls; this process can (a busy host, an emulator's stopped
         virtual CPU). After a gap of two sensor periods or more between services (a stall, as the
         loop counts one: :mod:`harness.signals.timing_counts`), the heartbeats and commands that
-        arrived meanwhile still wait unread: judged at ``now`` before them, the watchdog would
-        latch HEARTBEAT_WATCHDOG on a harness that kept sending. It then judges only up to the
-        previous service (the last moment it watched) and again at ``now`` once the frames are
-        read (:meth:`_after_frames`), so a harness that really went silent still trips it in this
+        arrived meanwhile still wait unread: judged at ``now`` before them (or as each is read, a
+        command before the heartbeat behind it), the watchdog would latch HEARTBEAT_WATCHDOG on a
+        harness that kept sending. Until every waiting frame is read it then judges only up to the
+        previous service (the last moment it watched), and at ``now`` once they are
+        (:meth:`_after_frames`), so a harness that really went silent still trips it in this
         service; the sub-steps of the stall run with the drive as last judged.
         """
         last, self._last_service_s = self._last_service_s, now

@@ -38,6 +38,7 @@ from harness.rig.faults import fault_id_for
 from harness.rig.virtual_rig import RigParts, VirtualRig
 from harness.runs.dry_run import RigCoordinator
 from harness.runs.options import StudyOptions, prepare_motion
+from harness.runs import rig_service
 from harness.runs.rig_service import run_rig_command
 from harness.safety.lifecycle import State
 from tests.conftest import PROFILES
@@ -305,8 +306,9 @@ def test_a_stall_of_the_rig_itself_is_not_a_silent_harness(bench):
     The drive it emulates never stalls: the heartbeats that waited unread keep it READY.
     """
     b = _ready_in_real_time(bench)
-    for _ in range(12):  # the harness goes on at 20 Hz; the rig is not serviced for 0.6 s
+    for _ in range(12):  # the harness goes on at 20 Hz, a command and a heartbeat a tick; the rig is not serviced for 0.6 s
         b.now += 0.05
+        b.writer.command(0.0, False, b.now)  # read first: judged as it is read, the watchdog would latch already
         b.writer.heartbeat(1, b.now)
     b.service(0.0)
     assert b.rig.state.drive_state == DriveState.READY and b.rig.own_stalls == 1
@@ -506,12 +508,14 @@ def test_real_time_thread_plays_the_record(bench, profile):
         b.rig.stop()
 
 
-def test_run_rig_command_serves_and_stops_cleanly():
+def test_run_rig_command_serves_and_stops_cleanly(monkeypatch):
     channel = f"cmd-{uuid.uuid4().hex[:10]}"
     link = open_harness(CanConfig(channel=channel))
     stop = threading.Event()
     result = {}
     ready = threading.Event()
+    frozen_before_serving = []
+    monkeypatch.setattr(rig_service, "freeze_garbage", lambda: frozen_before_serving.append(not ready.is_set()))
 
     def target() -> None:
         result["status"] = run_rig_command(
@@ -528,6 +532,7 @@ def test_run_rig_command_serves_and_stops_cleanly():
         stop.set()
         thread.join(10.0)
         assert not thread.is_alive() and result["status"] == exit_codes.OK
+        assert frozen_before_serving == [True], "the garbage collector frozen once, before the rig served"
         link.reader.poll(time.monotonic())
         assert link.reader.drive_state == DriveState.OFF, "the last status says the drive is off"
     finally:

@@ -10,6 +10,7 @@ import subprocess
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from harness import exit_codes
@@ -210,8 +211,8 @@ def test_a_host_stall_trip_is_run_again_only_where_the_test_asks_and_is_counted(
     assert done.returncode == exit_codes.OK and attempts.made == 2
     assert [p.name for p in log_dir.iterdir()] == ["run2"]
     assert len(records[-1].host_stalls) == 1 and "waiting for the next deadline" in records[-1].host_stalls[0]
-    assert "1 tripped on a stall the host made" in summary_line([records[-1].as_dict()])
-    assert "tripped on a stall the host made while the loop waited" in capsys.readouterr().out
+    assert "1 tripped on a stall an emulator made" in summary_line([records[-1].as_dict()])
+    assert "run 1 tripped on a stall the host made" in capsys.readouterr().out
     # not asked for: the trip is the test's to judge
     plain = StallingAttempts(tmp_path / "plain", WAITED, _done(exit_codes.TRIPPED, out="outcome: tripped (loop_stall)"),
                              _done(exit_codes.OK))
@@ -232,6 +233,51 @@ def test_a_stall_in_the_loops_own_work_or_another_trip_is_never_run_again(tmp_pa
     done = run_real_time(other, log_dir=tmp_path / "b", rate_hz=RATE_HZ, stall_budget_s=BUDGET_S, what="a run",
                          wait=_quiet, records=records, retry_host_stalls=True)
     assert done.returncode == exit_codes.TRIPPED and other.made == 1
+
+
+def _can_log(folder: Path, sensor_times_s, command_times_s) -> None:
+    """A candump ``can.log`` with the rig's table sensor frames (received) and the loop's commands (sent)."""
+    lines = [(t, "030#0000000000000000 R") for t in sensor_times_s] + [(t, "020#00000000 T") for t in command_times_s]
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "can.log").write_text("".join(f"({1000.0 + t:.6f}) vcan0 {frame}\n" for t, frame in sorted(lines)))
+
+
+STALE = _done(exit_codes.TRIPPED, out="outcome: tripped (sensor_stale), with a warning")
+TICKS = np.arange(0.0, 1.0, 0.01)
+
+
+def test_a_sensor_stale_trip_is_the_rigs_stall_only_when_its_frames_stopped_and_the_commands_did_not(tmp_path):
+    """CI in User-Mode Linux: the rig's frames stopped 159 ms while the loop sent a command every 10 ms."""
+    rig_stopped = tmp_path / "rig"
+    _can_log(rig_stopped, TICKS[(TICKS < 0.4) | (TICKS > 0.55)], TICKS)
+    found = realtime_runs.rig_stall_trip(STALE, [rig_stopped], 0.08)
+    assert found is not None and "stopped 170.0 ms" in found and "sent 16 commands" in found and "none more than 10.0 ms apart" in found
+    both_stopped = tmp_path / "both"  # the loop stalled too: the stall is not the rig's alone
+    _can_log(both_stopped, TICKS[(TICKS < 0.4) | (TICKS > 0.55)], TICKS[(TICKS < 0.42) | (TICKS > 0.53)])
+    assert realtime_runs.rig_stall_trip(STALE, [both_stopped], 0.08) is None
+    short = tmp_path / "short"  # a gap within the limit explains no trip
+    _can_log(short, TICKS[(TICKS < 0.4) | (TICKS > 0.44)], TICKS)  # 60 ms
+    assert realtime_runs.rig_stall_trip(STALE, [short], 0.08) is None
+    other_trip = _done(exit_codes.TRIPPED, out="outcome: tripped (stroke_limit)")
+    assert realtime_runs.rig_stall_trip(other_trip, [rig_stopped], 0.08) is None
+    assert realtime_runs.rig_stall_trip(_done(exit_codes.OK, out="completed"), [rig_stopped], 0.08) is None
+
+
+def test_a_rig_stall_trip_is_run_again_where_the_test_asks(tmp_path):
+    records: list[realtime_runs.RealTimeRecord] = []
+
+    class RigStalls(Attempts):
+        def __call__(self) -> subprocess.CompletedProcess:
+            done = super().__call__()
+            if done.returncode == exit_codes.TRIPPED:
+                _can_log(self.log_dir / f"run{self.made}", TICKS[(TICKS < 0.4) | (TICKS > 0.55)], TICKS)
+            return done
+
+    attempts = RigStalls(tmp_path / "logs", STALE, _done(exit_codes.OK, out="completed"))
+    done = run_real_time(attempts, log_dir=tmp_path / "logs", rate_hz=100.0, stall_budget_s=0.08, what="a run",
+                         wait=_quiet, records=records, retry_host_stalls=True)
+    assert done.returncode == exit_codes.OK and attempts.made == 2
+    assert "the rig's sensor frames stopped" in records[-1].host_stalls[0]
 
 
 def test_a_host_that_stalls_every_run_fails_after_the_most_runs(tmp_path):

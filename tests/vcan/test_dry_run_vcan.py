@@ -150,7 +150,9 @@ def test_real_time_dry_run_across_processes_over_vcan0(vcan_channel, tmp_path):
     stall the loop spent waiting for its deadline: inside UML the dry run shows a 50-63 ms stall about once a
     second (a bare 100 Hz loop in the same UML shows none, with or without an fsync each second), and one of
     81 ms against the 80 ms budget tripped a CI run; the trip is the supervisor's job done, the emulator's stall
-    says nothing of the SocketCAN path (tests/realtime_runs.py counts and reports each).
+    says nothing of the SocketCAN path. So, last, is a ``sensor_stale`` trip while the rig's process was not run:
+    a run here saw the rig's frames stop 159 ms, its commands going on every 10 ms (tests/realtime_runs.py tells the two apart
+    from the run's own can.log, and counts and reports each).
     """
     command = ("dry-run", "--interface", "socketcan", "--channel", vcan_channel, "--rate", RT_RATE_HZ, "--quiet",
                "--duration", "5", "--log-dir", str(tmp_path), *SLOW_HOST_REAL_TIME)
