@@ -23,10 +23,11 @@ With ``--actuator``, the README's actuator step: ``harness identify actuator --b
 the sensors' noise), against the shipped actuator as its linearised model states it
 (:class:`~harness.identification.actuator_fit.ActuatorParameters` from the profile, the delay the
 loop's share plus the actuator's): every value the fit frees. Intervals: as the structure's,
-value -/+ t (7 degrees of freedom, 2.36) standard errors, as ``identification.json`` states them. Folders already in ``--out`` are fitted again
-without new runs.
+value -/+ t (7 degrees of freedom, 2.36) standard errors, as ``identification.json`` states them.
+Folders already in ``--out`` are fitted again without new runs.
 
-Usage: python benchmarks/identify_coverage.py [--bearing | --actuator] [--seeds N] [--duration S] [--workers W] [--out DIR]
+Usage: python benchmarks/identify_coverage.py [--bearing | --actuator] [--seeds N] [--duration S] [--workers W]
+[--out DIR]
 """
 
 from __future__ import annotations

@@ -44,9 +44,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import pytest
-
 import numpy as np
+import pytest
 
 from drivers.protocol.codec import load_protocol
 from harness import exit_codes

@@ -383,7 +383,7 @@ def _band_blocks(measured: Measured) -> np.ndarray:
 
 
 def _honest_covariance(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray) -> np.ndarray:
-    """The fit's covariance with each variance the larger of the Jacobian's and the blocks' (their correlations the Jacobian's)."""
+    """The fit's covariance, each variance the larger of the Jacobian's and the blocks' (correlations the Jacobian's)."""
     model = covariance(jacobian, residuals, correlation_time(residuals))
     errors = honest_standard_errors(jacobian, residuals, blocks)
     model_errors = np.sqrt(np.maximum(np.diag(model), 0.0))

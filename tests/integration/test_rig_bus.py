@@ -36,9 +36,9 @@ from harness.rig.config import (
 )
 from harness.rig.faults import fault_id_for
 from harness.rig.virtual_rig import RigParts, VirtualRig
+from harness.runs import rig_service
 from harness.runs.dry_run import RigCoordinator
 from harness.runs.options import StudyOptions, prepare_motion
-from harness.runs import rig_service
 from harness.runs.rig_service import run_rig_command
 from harness.safety.lifecycle import State
 from tests.conftest import PROFILES

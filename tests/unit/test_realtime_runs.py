@@ -251,7 +251,8 @@ def test_a_sensor_stale_trip_is_the_rigs_stall_only_when_its_frames_stopped_and_
     rig_stopped = tmp_path / "rig"
     _can_log(rig_stopped, TICKS[(TICKS < 0.4) | (TICKS > 0.55)], TICKS)
     found = realtime_runs.rig_stall_trip(STALE, [rig_stopped], 0.08)
-    assert found is not None and "stopped 170.0 ms" in found and "sent 16 commands" in found and "none more than 10.0 ms apart" in found
+    assert found is not None and "stopped 170.0 ms" in found and "sent 16 commands" in found
+    assert "none more than 10.0 ms apart" in found
     both_stopped = tmp_path / "both"  # the loop stalled too: the stall is not the rig's alone
     _can_log(both_stopped, TICKS[(TICKS < 0.4) | (TICKS > 0.55)], TICKS[(TICKS < 0.42) | (TICKS > 0.53)])
     assert realtime_runs.rig_stall_trip(STALE, [both_stopped], 0.08) is None
