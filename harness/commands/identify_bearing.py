@@ -60,10 +60,11 @@ def add_parser(sub) -> None:
 
 
 def simex_line(fit: FrictionFit) -> str:
-    """One line: which values are SIMEX-corrected for the sensors' noise, and by how much each moved."""
+    """One line: which values are SIMEX-corrected for the sensors' noise, and by how much each moved (a fit with SIMEX)."""
     from harness.identification.friction_fit import SIMEX_CORRECTED
 
     simex = fit.simex
+    assert simex is not None, "called only for a fit that made the SIMEX correction"
     moved = ", ".join(f"{name} {100 * (fit.estimates[name].value / simex.plain[name][0] - 1):+.2f} % (plain fit "
                       f"{simex.plain[name][0]:.4g})" for name in SIMEX_CORRECTED)
     noise = ", ".join(f"{1e6 * sx:.2g} um and {1e3 * sv:.2g} mm/s" for sx, sv in

@@ -506,6 +506,12 @@ def _solve(model: _Model, start: np.ndarray) -> optimize.OptimizeResult:
                                   x_scale=np.array([0.01, 0.1, 0.3, 0.3, 0.5]))
 
 
+def _measured_displacement(record: SlidingRecord) -> np.ndarray:
+    """The record's displacement sensor samples (m); :func:`simex_correction` is given only records that have them."""
+    assert record.measured_displacement_m is not None, "the SIMEX correction needs the displacement sensor's samples"
+    return record.measured_displacement_m
+
+
 def simex_correction(records: Sequence[SlidingRecord], design: BearingConfig, weight_N: float, lowpass_hz: float,
                      theta: np.ndarray, plain_se: np.ndarray, lambdas: Sequence[float] = SIMEX_LAMBDAS,
                      replicates: int = SIMEX_REPLICATES, seed: int = SIMEX_SEED) -> SimexCorrection:
@@ -540,7 +546,7 @@ def simex_correction(records: Sequence[SlidingRecord], design: BearingConfig, we
     seed : int
         Of the added noise: the same records give the same correction.
     """
-    sigma_x = tuple(noise_std(r.measured_displacement_m) for r in records)
+    sigma_x = tuple(noise_std(_measured_displacement(r)) for r in records)
     sigma_v = tuple(noise_std(r.velocity_m_s) for r in records)
     plain = _Model.physical(theta)
     estimates, evaluations = np.empty((replicates, len(lambdas), len(PARAMETERS))), 0

@@ -140,7 +140,7 @@ def extrapolate(plain: np.ndarray, lambdas: Sequence[float], replicates: np.ndar
     estimates = np.asarray(replicates, dtype=float)
     plain = np.asarray(plain, dtype=float)
     curves = np.concatenate([np.broadcast_to(plain, (estimates.shape[0], 1, plain.size)), estimates], axis=1)
-    weights = extrapolation_weights(grid)
+    weights = extrapolation_weights(grid.tolist())
     extrapolated = np.einsum("l,blp->bp", weights, curves)
     spread = extrapolated.std(axis=0, ddof=1) / math.sqrt(len(extrapolated)) if len(extrapolated) > 1 else np.zeros(plain.size)
     return Extrapolation(grid, curves.mean(axis=0), extrapolated.mean(axis=0), spread)
