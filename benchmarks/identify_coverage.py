@@ -53,6 +53,7 @@ from harness.identification.friction_fit import PARAMETERS  # noqa: E402
 from harness.identification.structure import identify_structure  # noqa: E402
 from harness.model.building import fixed_base_modes  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
+from harness.rig.grid import half_up  # noqa: E402
 
 
 def truth() -> dict[str, float]:
@@ -94,9 +95,11 @@ def one_bearing_seed(job: tuple[int, float, Path]) -> dict[str, tuple[float, flo
 def actuator_truth() -> dict[str, float]:
     """The shipped actuator as the fit's model states it (no ``rig.truth``): what the fit should find."""
     profile = load_profile()
+    step_s = 1.0 / profile.control.rate_hz  # in lockstep the rig delays its sensors by whole steps (harness/rig/sensors.py)
+    velocity_lag_s = half_up(profile.rig.sensors.velocity.delay_s / step_s) * step_s
     truth = ActuatorParameters.from_config(
         profile.rig.actuator.hydraulics, profile.rig.actuator.delay_s + loop_delay_s(profile, lockstep=True),
-        profile.rig.sensors.velocity.delay_s, profile.rig.physics_substep_s,
+        velocity_lag_s, profile.rig.physics_substep_s,
     )
     return {name: float(getattr(truth, name)) for name in FITTED}
 
