@@ -9,6 +9,7 @@ import re
 import numpy as np
 import pytest
 
+from harness.hydraulics.servo_controller import steady_bleed_N
 from harness.profile import load_profile
 from harness.rig.sensors import MESSAGE_COLUMNS, SIGNALS, SensorModel
 from harness.safety.actuator_detectors import (
@@ -35,7 +36,7 @@ from harness.safety.config import (
     RunConfig,
     SensorConfig,
 )
-from harness.safety.detector_base import Persistence, WindowCounter
+from harness.safety.detector_base import TIME_EPS_S, Persistence, WindowCounter
 from harness.safety.events import Action
 from harness.safety.health import TickHealth
 from harness.safety.operator_detectors import (
@@ -584,6 +585,13 @@ def test_actuator_status_stale_at_and_around_max_age() -> None:
     assert det.present(TickHealth(actuator_status_age_s=math.inf))
 
 
+def test_actuator_status_stale_exactly_on_its_bound_with_the_clock_tolerance_is_fresh() -> None:
+    """The bound is ``max_age_s`` plus the clock tolerance, inclusive (docs/SAFETY.md)."""
+    det = ActuatorStatusStale(ActuatorConfig(max_status_age_s=0.05))
+    assert not det.update(0.0, DT, TickHealth(actuator_status_age_s=0.05 + TIME_EPS_S))
+    assert det.update(0.0, DT, TickHealth(actuator_status_age_s=math.nextafter(0.05 + TIME_EPS_S, 1.0)))
+
+
 # ------------------------------------------------------------------ force tracking
 
 
@@ -690,3 +698,22 @@ def test_window_counter_reset_forgets_the_counter_so_the_next_update_only_primes
     assert not window.update(0.2, 50)  # 48 counted before the reset are not events now
     assert window.count(0.2) == 0
     assert window.update(0.3, 53)  # three new ones within the window are
+
+
+def test_force_tracking_bleed_without_a_supply_force_is_the_linear_share_the_feed_forward_leaves() -> None:
+    """No ``supply_force_N``: ``(1 - alpha) c v``, whatever the load (SPEC 7a')."""
+    det = ForceTracking(ForceConfig(velocity_feedback_Ns_per_m=94000.0, velocity_feedforward_gain=0.25,
+                                    supply_force_N=None))
+    assert det.bleed_N(0.1, 0.0) == pytest.approx(0.75 * 94000.0 * 0.1)
+    assert det.bleed_N(0.1, 8000.0) == pytest.approx(0.75 * 94000.0 * 0.1)
+
+
+def test_force_tracking_bleed_with_a_supply_force_has_the_orifice_and_holds_the_load_to_two_thirds() -> None:
+    """With ``supply_force_N`` the orifice's share comes in (non-zero at full feed-forward under load), both signs."""
+    supply_N, c, v = 15000.0, 94000.0, 0.1
+    det = ForceTracking(ForceConfig(velocity_feedback_Ns_per_m=c, velocity_feedforward_gain=1.0, supply_force_N=supply_N))
+    for load_N in (5000.0, -5000.0):
+        expected = steady_bleed_N(c, v, load_N, supply_N, 1.0)
+        assert expected != 0.0 and det.bleed_N(v, load_N) == pytest.approx(expected)
+    for beyond_N, held_N in ((14000.0, 10000.0), (-14000.0, -10000.0)):
+        assert det.bleed_N(v, beyond_N) == pytest.approx(steady_bleed_N(c, v, held_N, supply_N, 1.0))
