@@ -21,10 +21,11 @@ waits, then asks again.
    :data:`MAX_RUNS` runs in all;
 3. returns the first run the pre-flight let through, whatever its outcome: a trip or any other
    failure is the test's to judge, never retried; the one exception, asked for by a test whose host is
-   an emulator (``retry_host_stalls``: the vcan stage in User-Mode Linux), is a trip on a stall the emulator
-   made: ``loop_stall`` on a stall the loop spent waiting for its deadline (:func:`host_stall_trip`), or
-   ``sensor_stale`` where the run's own ``can.log`` shows the rig's process stopped sending while the
-   loop went on sending its commands (:func:`rig_stall_trip`);
+   an emulator or a machine shared with other work (``retry_host_stalls``: the vcan stage in User-Mode
+   Linux, the host's real-time dry runs on a 2-vCPU CI runner), is a trip on a stall the host made, as the
+   run's own record shows it: ``loop_stall`` on a stall the loop spent waiting for its deadline
+   (:func:`host_stall_trip`), or ``sensor_stale`` where the run's ``can.log`` shows the rig's frames stopped
+   longer than the limit while the loop's commands had no gap that long (:func:`rig_stall_trip`);
 4. fails the test with every refusal's figures when all :data:`MAX_RUNS` were refused: this host is
    too noisy to run the test at all, and says so.
 
@@ -180,10 +181,11 @@ def rig_stall_trip(done: subprocess.CompletedProcess, folders: list[Path], limit
     """What ``can.log`` shows when ``done`` tripped ``sensor_stale`` because the rig's process stopped sending; else None.
 
     Inside User-Mode Linux the rig's process, on the same one virtual CPU as the loop, is now and then not
-    run for 0.1-0.2 s while the loop goes on: its sensor frames age past the limit and the loop trips, as it
-    must. The run's ``can.log`` tells the two apart: the rig's table sensor frames (received) stop for longer
-    than ``limit_s`` while the loop's commands (sent) go on with no gap that long in the same stretch. A loop
-    that stalled itself, or a rig that stopped while the loop did too, is never this.
+    run for 0.1-0.2 s while the loop goes on; on a shared machine both are stopped at once now and then, the
+    loop within its stall budget and the rig a frame period longer. Either way its sensor frames age past the
+    limit and the loop trips, as it must. The run's ``can.log`` tells that from a fault of the path: the rig's
+    table sensor frames (received) stop for longer than ``limit_s`` while the loop's commands (sent) have no gap
+    that long in the same stretch. A loop that stalled past the limit itself is never this.
     """
     if done.returncode != exit_codes.TRIPPED or STALE_TRIP not in _output(done):
         return None
@@ -231,7 +233,7 @@ def _set_aside(log_dir: Path, before: set[Path]) -> None:
 def run_real_time(
     attempt: Callable[[], subprocess.CompletedProcess], *, log_dir: Path, rate_hz: float, stall_budget_s: float,
     what: str, wait: Callable[[float, float], QuietWait] = wait_for_quiet_second, records: list[RealTimeRecord] = RECORDS,
-    retry_host_stalls: bool = False,
+    retry_host_stalls: bool = False, max_runs: int = MAX_RUNS,
 ) -> subprocess.CompletedProcess:
     """Run ``attempt`` after a quiet second; run it again while the pre-flight refuses it (module docstring).
 
@@ -250,11 +252,13 @@ def run_real_time(
     records : list
         Where the run's :class:`RealTimeRecord` goes: :data:`RECORDS`, or a test's own list.
     retry_host_stalls : bool
-        Also run again a run that tripped on a stall the emulator made: ``loop_stall`` on a stall the loop spent
-        waiting for its deadline (:func:`host_stall_trip`), or ``sensor_stale`` while the rig's process stopped
-        and the loop did not (:func:`rig_stall_trip`), with ``stall_budget_s`` as the sensors' age limit: for a
-        test whose host is an emulator (User-Mode Linux), where such stalls are the emulator's; counted and
-        reported like the refusals, within the same :data:`MAX_RUNS`.
+        Also run again a run that tripped on a stall the host made: ``loop_stall`` on a stall the loop spent
+        waiting for its deadline (:func:`host_stall_trip`), or ``sensor_stale`` while the rig's frames stopped
+        longer than ``stall_budget_s`` and the loop's commands did not (:func:`rig_stall_trip`): for a test whose
+        host is an emulator (User-Mode Linux) or a shared machine, where such stalls are the host's; counted and
+        reported like the refusals, within the same ``max_runs``.
+    max_runs : int
+        Runs at most: :data:`MAX_RUNS`, or more for a test whose host stalls more often (an emulator).
 
     Returns
     -------
@@ -272,7 +276,7 @@ def run_real_time(
         record.runs += 1
         stall = _emulator_stall(done, sorted(set(log_dir.iterdir()) - before), stall_budget_s) \
             if retry_host_stalls and log_dir.is_dir() else None
-        if stall is not None and record.runs < MAX_RUNS:
+        if stall is not None and record.runs < max_runs:
             record.host_stalls.append(stall[-300:])
             print(f"{what}: run {record.runs} tripped on a stall the host made: {stall[-300:]}")
             _set_aside(log_dir, before)
@@ -285,7 +289,7 @@ def run_real_time(
         record.refusals.append(figures.group(0) if figures else _output(done)[-500:])
         print(f"{what}: run {record.runs} refused by the pre-flight: {record.refusals[-1]}")
         _set_aside(log_dir, before)
-        if record.runs >= MAX_RUNS:
+        if record.runs >= max_runs:
             pytest.fail(
                 f"{what}: the pre-flight refused all {record.runs} runs, so this host was never quiet enough to run "
                 f"this real-time test ({record.waited_s:.0f} s spent waiting for a quiet second, none found before "
@@ -303,8 +307,8 @@ def summary_line(records: list[dict]) -> str:
     never = sum(r["never_quiet"] for r in records)
     stalls = sum(len(r.get("host_stalls", ())) for r in records)
     return (f"real-time runs: {len(records)} asked for, {runs} started, {refused} refused by the pre-flight "
-            f"(run again, up to {MAX_RUNS} runs a test), {stalls} tripped on a stall an emulator made (the loop "
-            f"waiting, or the rig's process stopped: run again where the test allows), "
+            f"(run again, up to {MAX_RUNS} runs a test or as many as it asks), {stalls} tripped on a stall the host "
+            f"made (the loop waiting, or the rig's frames stopped: run again where the test allows), "
             f"{waited:.0f} s spent waiting for a quiet second ({never} runs started without one)")
 
 

@@ -211,7 +211,7 @@ def test_a_host_stall_trip_is_run_again_only_where_the_test_asks_and_is_counted(
     assert done.returncode == exit_codes.OK and attempts.made == 2
     assert [p.name for p in log_dir.iterdir()] == ["run2"]
     assert len(records[-1].host_stalls) == 1 and "waiting for the next deadline" in records[-1].host_stalls[0]
-    assert "1 tripped on a stall an emulator made" in summary_line([records[-1].as_dict()])
+    assert "1 tripped on a stall the host made" in summary_line([records[-1].as_dict()])
     assert "run 1 tripped on a stall the host made" in capsys.readouterr().out
     # not asked for: the trip is the test's to judge
     plain = StallingAttempts(tmp_path / "plain", WAITED, _done(exit_codes.TRIPPED, out="outcome: tripped (loop_stall)"),
