@@ -98,6 +98,15 @@ def test_sensor_stale_at_and_around_max_age(which: str) -> None:
     assert det.present(_health(**{which: 1.0})) and not det.present(_health())
 
 
+@pytest.mark.parametrize("which", ["table_age_s", "base_age_s"])
+def test_sensor_stale_exactly_on_its_bound_with_the_clock_tolerance_is_fresh(which: str) -> None:
+    """The bound is ``max_sensor_age_s`` plus the clock tolerance, inclusive, for each sensor."""
+    det = SensorStale(SENSORS)
+    bound = SENSORS.max_sensor_age_s + TIME_EPS_S
+    assert not det.update(0.0, DT, _health(**{which: bound}))
+    assert det.update(0.0, DT, _health(**{which: math.nextafter(bound, 1.0)}))
+
+
 # ------------------------------------------------------------------ sensor_jump
 
 
@@ -116,6 +125,20 @@ def test_sensor_jump_at_and_around_the_limit(channel: str, limit: float) -> None
     setattr(health.meas, channel, limit * 1.001)
     assert det.update(3 * DT, DT, health)  # first sample after the jump
     assert "changed by" in det.detail(health)
+
+
+@pytest.mark.parametrize(("channel", "limit"), [
+    ("table_displacement_m", SENSORS.jump_limit_m), ("table_velocity_m_s", SENSORS.jump_limit_m_s),
+])
+def test_sensor_jump_of_exactly_the_limit_is_allowed(channel: str, limit: float) -> None:
+    """The limit is the largest change allowed in one sample: a change of exactly it does not fire."""
+    det = SensorJump(SENSORS)
+    health = _health()
+    assert not det.update(0.0, DT, health)  # primes at 0
+    setattr(health.meas, channel, limit)
+    assert not det.update(DT, DT, health)
+    setattr(health.meas, channel, math.nextafter(2.0 * limit, 1.0))  # a change of just over the limit
+    assert det.update(2 * DT, DT, health)
 
 
 @pytest.mark.parametrize(("channel", "limit"), [
