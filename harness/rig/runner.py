@@ -9,7 +9,7 @@ drive watchdog every ``poll_timeout_s`` when commands stop. The mode may change 
 any time through RIG_CONTROL; the loop follows. An exception ends the loop and is
 kept in ``rig.error`` for the owner (a thread cannot raise to it).
 
-A rig process freezes its garbage collector before it serves (:func:`freeze_garbage`, called
+A rig process freezes its garbage collector before it serves (:func:`harness.realtime.host.freeze_garbage`, called
 by :func:`harness.runs.rig_service.serve_rig`): the rig emulates devices that never pause, and a
 full collection over everything its start-up built (compiled kernels, the DBC, the record)
 stopped it 33-78 ms inside User-Mode Linux, long enough for its sensor frames to age past a
@@ -18,24 +18,12 @@ loop's limit.
 
 from __future__ import annotations
 
-import gc
 import threading
 from collections.abc import Callable
 
 from harness.realtime.config import AUTO_RIG_PRIORITY
 from harness.realtime.host import Scheduling, request_fifo, restore_scheduling
 from harness.realtime.scheduler import FixedRateScheduler
-
-
-def freeze_garbage() -> None:
-    """Collect once, then move every object alive into the collector's permanent generation.
-
-    The collector stays on (the rig serves for as long as it is left running): its full
-    collections then scan only what was made since, not the start-up's hundreds of thousands of
-    objects. The loop goes further for the length of a run (:func:`harness.realtime.host.apply_realtime`).
-    """
-    gc.collect()
-    gc.freeze()
 
 
 def serve(

@@ -25,8 +25,8 @@ from harness.canbus.link import open_rig
 from harness.errors import EXPECTED_ERRORS, BusError
 from harness.model.warmup import warm_up
 from harness.profile import Profile, load_profile
+from harness.realtime.host import freeze_garbage
 from harness.rig.parts import RigParts
-from harness.rig.runner import freeze_garbage
 from harness.rig.virtual_rig import VirtualRig
 from harness.runs.options import StudyOptions, prepare_motion, resolve_profile
 
@@ -134,7 +134,7 @@ def serve_rig(
             can_config=can_config,
         )
         status = exit_codes.OK
-        freeze_garbage()  # no full collection over the start-up's objects while serving (harness.rig.runner)
+        freeze_garbage()  # no full collection over the start-up's objects while serving (harness.realtime.host)
         rig.start_thread(fifo_priority=profile.loop.realtime.fifo_priority)  # in real time only (harness.rig.runner)
         try:
             if on_ready is not None:

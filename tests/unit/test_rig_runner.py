@@ -61,7 +61,7 @@ def test_freezing_the_garbage_moves_what_is_alive_out_of_the_collectors_reach():
     """A rig process's full collections then scan only what was made after its start-up (harness.rig.runner)."""
     import gc
 
-    from harness.rig.runner import freeze_garbage
+    from harness.realtime.host import freeze_garbage
 
     alive = [object() for _ in range(1000)]
     before = gc.get_freeze_count()
