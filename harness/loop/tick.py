@@ -193,6 +193,7 @@ class ControlTick:
         health.drive_fault_code = self.reader.fault_code
         health.pressure_ok = self.reader.pressure_ok
         health.actuator_status_age_s = status.age(now)
+        health.actuator_status_fresh = status.fresh
         # the load cell: the supervisor's tracking check, and the actuator-aware designs' force state
         self.meas.actuator_force_N = health.measured_force_N = self.reader.measured_force_n
         health.estop = self.reader.estop_requested

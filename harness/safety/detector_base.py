@@ -14,6 +14,9 @@ import math
 from harness.safety.events import Action
 from harness.safety.health import TickHealth
 
+#: sqrt(2), the Butterworth damping of :class:`HighPass`.
+SQRT2 = math.sqrt(2.0)
+
 #: Tolerance on time comparisons (s), so that a persistence of exactly N ticks is N ticks.
 TIME_EPS_S = 1e-9
 
@@ -178,36 +181,45 @@ class LowPass:
 
 
 class HighPass:
-    """Second-order Butterworth high-pass at ``corner_hz``, by the bilinear transform at each step's ``dt``.
+    """Second-order Butterworth high-pass at ``corner_hz``, by the trapezoidal rule on states in the input's unit.
 
-    ``H(s) = s^2 / (s^2 + sqrt(2) w_c s + w_c^2)``, pre-warped so the corner is exact at every step:
-    with ``K = tan(pi f_c dt)``, ``y = b0 (u - 2 u1 + u2) - a1 y1 - a2 y2``, ``b0 = 1 / (1 + sqrt(2) K + K^2)``,
-    ``a1 = 2 (K^2 - 1) b0``, ``a2 = (1 - sqrt(2) K + K^2) b0``. A step longer than :attr:`max_step_s`
-    (a quarter period at the corner: a stall) is taken as that long, so ``K`` stays at most 1 and the
-    filter stable. Primed by its first input at rest (a constant input gives 0).
+    ``H(s) = s^2 / (s^2 + sqrt(2) w_c s + w_c^2)`` is ``y = u - z - sqrt(2) v`` with ``z`` the
+    Butterworth low-pass of ``u`` and ``v = z' / w_c``: ``z' = w_c v``, ``v' = w_c y``. Both states are
+    in the input's unit and mean the same thing whatever the step, so a step that changes (a
+    stall, then the period again) changes only how far they move, never what they hold. The
+    direct-form biquad this replaced kept past inputs and outputs whose combination is right only
+    for the step they were taken at: after a stall its output ran away (a 2 Hz force in the
+    controller's band, in a 2 kHz loop with stalls of 1-10 ms, read millions of newtons above the
+    corner; tests/unit/test_force_oscillation.py).
+
+    Each step is the trapezoidal rule with ``a = w_c dt / 2`` pre-warped to ``a = tan(pi f_c dt)``:
+    at a constant ``dt`` exactly the bilinear transform of ``H`` with its corner at ``f_c``. A step
+    longer than :attr:`max_step_s` (a quarter period at the corner: a stall) is taken as that long
+    (``a`` at most 1). Primed by its first input at rest (``z = u``, ``v = 0``: a constant input gives 0).
     """
 
-    __slots__ = ("corner_hz", "max_step_s", "_u1", "_u2", "_y1", "_y2", "primed")
+    __slots__ = ("corner_hz", "max_step_s", "_u", "_z", "_v", "primed")
 
     def __init__(self, corner_hz: float) -> None:
         self.corner_hz = corner_hz
         self.max_step_s = 0.25 / corner_hz
-        self._u1 = self._u2 = self._y1 = self._y2 = 0.0
+        self._u = self._z = self._v = 0.0
         self.primed = False
 
     def update(self, u: float, dt: float) -> float:
         """Filter one sample taken ``dt`` seconds after the previous one."""
         if not self.primed:
             self.primed = True
-            self._u1 = self._u2 = u
-            self._y1 = self._y2 = 0.0
-        k = math.tan(math.pi * self.corner_hz * min(dt, self.max_step_s))
-        b0 = 1.0 / (1.0 + math.sqrt(2.0) * k + k * k)
-        y = (b0 * (u - 2.0 * self._u1 + self._u2) - 2.0 * (k * k - 1.0) * b0 * self._y1
-             - (1.0 - math.sqrt(2.0) * k + k * k) * b0 * self._y2)
-        self._u2, self._u1 = self._u1, u
-        self._y2, self._y1 = self._y1, y
-        return y
+            self._u, self._z, self._v = u, u, 0.0
+        a = math.tan(math.pi * self.corner_hz * min(dt, self.max_step_s))
+        # (I - a M) x_new = (I + a M) x + a (u_old + u) [0, 1], M = [[0, 1], [-1, -sqrt(2)]]
+        r1 = self._z + a * self._v
+        r2 = -a * self._z + (1.0 - SQRT2 * a) * self._v + a * (self._u + u)
+        det = 1.0 + SQRT2 * a + a * a
+        self._z = ((1.0 + SQRT2 * a) * r1 + a * r2) / det
+        self._v = (r2 - a * r1) / det
+        self._u = u
+        return u - self._z - SQRT2 * self._v
 
     def reset(self) -> None:
         """Unprime: the next input starts the filter at rest."""

@@ -45,6 +45,10 @@ class TickHealth:
         0 none): why the drive faulted, e.g. its heartbeat watchdog.
     actuator_status_age_s : float
         Age of the newest actuator status frame (s).
+    actuator_status_fresh : bool
+        A new actuator status frame (the load cell's sample) was accepted this tick. The load cell
+        comes at ``can.status_rate_hz`` (250 Hz), slower than a fast loop: between its samples
+        :attr:`measured_force_N` holds the last one, and a check that filters it counts fresh samples.
     measured_force_N : float
         Force reported by the actuator's load cell (N).
     stall_s : float
@@ -91,6 +95,7 @@ class TickHealth:
     drive_fault_code: int = 0
     pressure_ok: bool = True
     actuator_status_age_s: float = 0.0
+    actuator_status_fresh: bool = True
     measured_force_N: float = 0.0
     stall_s: float = 0.0
     missed_periods: int = 0

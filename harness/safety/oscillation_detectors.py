@@ -33,13 +33,17 @@ class ForceOscillation(Detector):
     NAME = "force_oscillation"
     ACTION = Action.SAFE_STOP
     DETECTS = (
-        "RMS over oscillation_window_s of the commanded or the measured force above oscillation_corner_hz "
-        "(2nd-order high-pass) above oscillation_limit_N"
+        "RMS over oscillation_window_s of the commanded force (each tick) or the measured force (each load-cell "
+        "sample) above oscillation_corner_hz (2nd-order high-pass) above oscillation_limit_N"
     )
     BOUND = "first tick the running RMS exceeds oscillation_limit_N"
     RESET = "explicit reset; filters and running mean squares cleared"
 
-    __slots__ = ("limit_N", "window_s", "command_N", "_high", "_mean_square", "rms_N", "peak_rms_N", "_force")
+    __slots__ = (
+        "limit_N", "window_s", "command_N", "_high", "_mean_square", "rms_N", "peak_rms_N", "_force", "_load_cell_dt_s",
+    )
+    #: Loop time since the load cell's last sample entered the filter (s); set by :meth:`reset`.
+    _load_cell_dt_s: float
 
     def __init__(self, config: ForceConfig) -> None:
         super().__init__(ACTION_BY_NAME[config.oscillation_action])
@@ -65,9 +69,22 @@ class ForceOscillation(Detector):
         return not rms <= self.limit_N
 
     def update(self, t: float, dt: float, health: TickHealth) -> bool:
-        """True while either force's running RMS above the corner exceeds the limit."""
+        """True while either force's running RMS above the corner exceeds the limit.
+
+        The command changes every tick; the load cell only with each actuator status frame
+        (``health.actuator_status_fresh``, at ``can.status_rate_hz``). Its filters step once per
+        sample, over the time since the previous one: filtered every tick, a 250 Hz sample held
+        through a 2 kHz loop is a staircase whose steps are content far above the corner that
+        the force never had (docs/SAFETY.md, "Sustained oscillation"). A load cell that is not
+        finite is judged at once.
+        """
         commanded = self._over(0, self.command_N, dt)
-        measured = self._over(1, health.measured_force_N, dt)
+        self._load_cell_dt_s += dt
+        if health.actuator_status_fresh or not math.isfinite(health.measured_force_N):
+            measured = self._over(1, health.measured_force_N, self._load_cell_dt_s)
+            self._load_cell_dt_s = 0.0
+        else:
+            measured = not self.rms_N[1] <= self.limit_N
         if commanded or measured:
             self._force = 0 if commanded else 1
         return commanded or measured
@@ -89,3 +106,4 @@ class ForceOscillation(Detector):
             self._mean_square[k].reset(0.0, True)
             self.rms_N[k] = 0.0
         self.peak_rms_N = 0.0
+        self._load_cell_dt_s = 0.0

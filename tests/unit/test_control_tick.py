@@ -68,6 +68,7 @@ class Bench:
         self.v_b = 0.0
         self.publish_sensors = True
         self.publish_panel = True  # the E-stop panel's heartbeat (ESTOP, source 3, active=0)
+        self.publish_status = True  # ACTUATOR_STATUS (the load cell): slower than the loop on a real bus
 
     def close(self) -> None:
         self.link.close()
@@ -82,9 +83,10 @@ class Bench:
             w.base(self.x_b + noise_m, self.v_b + 10.0 * noise_m, 0.0, self.t)  # 1 LSB of ydot_b
         if self.publish_panel:
             w.estop(False, self.t, source=EstopSource.PANEL)
-        command = self.supervisor.command
-        drive_state = DriveState.ENABLED if command.enable else DriveState.READY
-        w.actuator_status(command.force_N, drive_state, True, FaultCode.NONE, self.t)
+        if self.publish_status:
+            command = self.supervisor.command
+            drive_state = DriveState.ENABLED if command.enable else DriveState.READY
+            w.actuator_status(command.force_N, drive_state, True, FaultCode.NONE, self.t)
 
     def step(self):
         """Publish, run one tick, and return the ACTUATOR_CMD (enable, force_N) the rig received for it."""

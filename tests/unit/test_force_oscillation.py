@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import random
 
 import pytest
 
@@ -19,6 +20,8 @@ from harness.safety.oscillation_detectors import ForceOscillation
 from harness.safety.supervisor import Supervisor
 
 DT = 0.002  # the shipped profile's 500 Hz
+FAST_DT = 0.0005  # a 2 kHz loop (the FD profile)
+STATUS_EVERY = 8  # ACTUATOR_STATUS at the shipped can.status_rate_hz, 250 Hz: one load-cell sample every 8 ticks
 CONFIG = ForceConfig()
 LIMIT_CYCLE_HZ = 48.3  # the coupled peak of the shipped actuator's free response (issue 30)
 
@@ -89,6 +92,40 @@ def test_a_step_longer_than_a_quarter_period_at_the_corner_is_taken_as_one() -> 
     assert outputs[-1][0] != outputs[-1][1]  # a step just within the cap is taken as it is
 
 
+def test_stalls_of_the_loop_move_the_filter_less_far_and_add_no_content() -> None:
+    """The controller's band (full scale at 2 Hz, 4 kN at 12.2 Hz) in a 2 kHz loop that stalls 1-10 ms now and then.
+
+    The RMS above the corner is the band's own, as without stalls: the filter's states mean the
+    same at every step. The direct-form biquad it replaced read millions of newtons here.
+    """
+    both = lambda t: 10_000.0 * math.sin(2.0 * math.pi * 2.0 * t) + 4_000.0 * math.sin(2.0 * math.pi * 12.2 * t)  # noqa: E731
+    peaks = []
+    for stalls in (False, True):
+        detector, health, rng, t = ForceOscillation(CONFIG), TickHealth(), random.Random(5), 0.0
+        while t < 3.0:
+            dt = FAST_DT * (rng.randint(2, 20) if stalls and rng.random() < 0.03 else 1)
+            t += dt
+            detector.command_N = both(t)
+            detector.update(t, dt, health)
+        peaks.append(detector.peak_rms_N)
+    expected = math.hypot(10_000.0 * _gain(2.0, dt=FAST_DT), 4_000.0 * _gain(12.2, dt=FAST_DT)) / math.sqrt(2)
+    assert peaks[0] == pytest.approx(expected, rel=0.03)
+    assert peaks[1] == pytest.approx(peaks[0], rel=0.1)
+    assert max(peaks) < CONFIG.oscillation_limit_N
+
+
+def test_a_constant_through_steps_of_any_length_gives_nothing_nor_a_ramp_after_stalls() -> None:
+    """At rest on any step; a ramp (a second-order high-pass passes none) back at 0 once the stalls are over."""
+    high, rng = HighPass(30.0), random.Random(7)
+    assert all(abs(high.update(2_500.0, FAST_DT * rng.randint(1, 40))) < 1e-9 for _ in range(200))  # rounding only
+    ramp, t, out = HighPass(30.0), 0.0, 0.0
+    for k in range(4000):  # stalls through the first 1.5 s of loop time, then 0.5 s on the period
+        dt = FAST_DT * (rng.randint(2, 20) if k < 3000 and rng.random() < 0.05 else 1)
+        t += dt
+        out = ramp.update(1.0e5 * t, dt)
+    assert abs(out) < 1e-3  # N, of a ramp at 100 kN/s
+
+
 # ------------------------------------------------------------------ the limit, to the tick
 def test_fires_just_above_its_limit_and_not_at_it() -> None:
     n = int(1.0 / DT)
@@ -138,6 +175,68 @@ def test_the_controllers_band_stays_quiet() -> None:
     expected = math.hypot(10_000.0 * _gain(2.0), 4_000.0 * _gain(12.2)) / math.sqrt(2)
     assert detector.peak_rms_N == pytest.approx(expected, rel=0.05)
     assert detector.peak_rms_N < CONFIG.oscillation_limit_N
+
+
+# ------------------------------------------------------------------ the load cell's own samples
+
+
+def _held_load_cell(detector: ForceOscillation, seconds: float, force, fresh_says: bool = True) -> None:
+    """A 2 kHz loop over a load cell sampled at 250 Hz and held between samples, as the tick hands it over.
+
+    ``fresh_says=False`` marks every tick fresh: the held value taken for a new sample each tick.
+    """
+    health, held = TickHealth(), 0.0
+    for k in range(int(seconds / FAST_DT)):
+        fresh = k % STATUS_EVERY == 0
+        if fresh:
+            held = force(k * FAST_DT)
+        health.measured_force_N, health.actuator_status_fresh = held, fresh or not fresh_says
+        detector.update(k * FAST_DT, FAST_DT, health)
+
+
+def test_at_2_khz_the_load_cell_is_filtered_per_sample_and_the_controllers_band_stays_quiet() -> None:
+    """Full scale at 2 Hz and 4 kN at 12.2 Hz, the load cell at 250 Hz, the loop at 2 kHz: quiet.
+
+    Filtered every tick, the held samples are a staircase whose 4 ms steps are content above the
+    corner that the force never had: a healthy run at 2 kHz was stopped at 482 N on its stairs
+    (a CI run, 29 Nov 2026), where its samples alone gave 162 N. Per sample, the RMS is the band's
+    own, at the gain of the filter stepped at the sample interval.
+    """
+    both = lambda t: 10_000.0 * math.sin(2.0 * math.pi * 2.0 * t) + 4_000.0 * math.sin(2.0 * math.pi * 12.2 * t)  # noqa: E731
+    per_sample = ForceOscillation(CONFIG)
+    _held_load_cell(per_sample, 3.0, both)
+    sample_dt = STATUS_EVERY * FAST_DT
+    expected = math.hypot(10_000.0 * _gain(2.0, dt=sample_dt), 4_000.0 * _gain(12.2, dt=sample_dt)) / math.sqrt(2)
+    assert per_sample.peak_rms_N == pytest.approx(expected, rel=0.02)
+    assert per_sample.peak_rms_N < CONFIG.oscillation_limit_N
+    stairs = ForceOscillation(CONFIG)
+    _held_load_cell(stairs, 3.0, both, fresh_says=False)
+    assert stairs.peak_rms_N > CONFIG.oscillation_limit_N, "the staircase this test guards against is above the limit"
+
+
+def test_a_load_cell_sampled_at_250_hz_that_limit_cycles_still_fires_when_its_window_says() -> None:
+    sample_dt = STATUS_EVERY * FAST_DT
+    ratio = 2.0
+    amplitude = ratio * CONFIG.oscillation_limit_N * math.sqrt(2) / _gain(LIMIT_CYCLE_HZ, dt=sample_dt)
+    detector, health, held, fired = ForceOscillation(CONFIG), TickHealth(), 0.0, []
+    for k in range(int(1.0 / FAST_DT)):
+        health.actuator_status_fresh = k % STATUS_EVERY == 0
+        if health.actuator_status_fresh:
+            held = amplitude * math.sin(2.0 * math.pi * LIMIT_CYCLE_HZ * k * FAST_DT)
+        health.measured_force_N = held
+        fired.append(detector.update(k * FAST_DT, FAST_DT, health))
+    first = fired.index(True)
+    expected_s = CONFIG.oscillation_window_s * math.log(ratio**2 / (ratio**2 - 1))
+    assert first * FAST_DT == pytest.approx(expected_s, abs=0.02)  # a cycle of ripple and the filter's start
+    assert first % STATUS_EVERY == 0, "the load cell's RMS moves only with a sample"
+    assert all(fired[first:]), "and the check stays active on the ticks between samples"
+
+
+def test_a_load_cell_not_finite_fires_on_a_tick_without_a_new_sample_too() -> None:
+    detector, health = ForceOscillation(CONFIG), TickHealth()
+    assert not detector.update(0.0, FAST_DT, health)
+    health.actuator_status_fresh, health.measured_force_N = False, math.inf
+    assert detector.update(FAST_DT, FAST_DT, health)
 
 
 def test_a_load_cell_not_finite_fires_and_a_reset_clears_everything() -> None:

@@ -53,6 +53,18 @@ def test_the_tick_reports_whether_this_tick_brought_fresh_table_and_base_samples
     assert bench.tick.health.table_fresh is False and bench.tick.health.base_fresh is False
 
 
+def test_the_tick_reports_whether_this_tick_brought_a_fresh_load_cell_sample(bench) -> None:
+    """``force_oscillation`` filters the load cell once per sample (its ACTUATOR_STATUS frame), not per tick."""
+    bench.step()
+    assert bench.tick.health.actuator_status_fresh is True
+    bench.publish_status = False
+    bench.step()
+    assert bench.tick.health.actuator_status_fresh is False
+    bench.publish_status = True
+    bench.step()
+    assert bench.tick.health.actuator_status_fresh is True
+
+
 def test_a_controller_exception_trips_at_the_ticks_time_naming_the_exception(bench) -> None:
     bench.run_until_running()
     bench.controller.raise_next = True
