@@ -25,7 +25,9 @@ waits, then asks again.
    Linux, the host's real-time dry runs on a 2-vCPU CI runner), is a trip on a stall the host made, as the
    run's own record shows it: ``loop_stall`` on a stall the loop spent waiting for its deadline
    (:func:`host_stall_trip`), or ``sensor_stale`` where the run's ``can.log`` shows the rig's frames stopped
-   longer than the limit while the loop's commands had no gap that long (:func:`rig_stall_trip`);
+   longer than the limit while the loop's commands had no gap that long (:func:`rig_stall_trip`), or, where the
+   test gives the drive's watchdog, a refusal to arm on its HEARTBEAT_WATCHDOG while the loop's heartbeats had
+   no gap that long (:func:`watchdog_arm_refusal`);
 4. fails the test with every refusal's figures when all :data:`MAX_RUNS` were refused: this host is
    too noisy to run the test at all, and says so.
 
@@ -75,6 +77,8 @@ STALL_TRIP = "tripped (loop_stall)"
 WAITING_STALL = f"the loop was {GAP_PART_WORDS['wait']}"
 #: The words of a trip for sensor frames older than their limit.
 STALE_TRIP = "tripped (sensor_stale)"
+#: The words of a refusal to arm on the drive's latched heartbeat watchdog (the pre-arm check's detail).
+WATCHDOG_FAULT = "HEARTBEAT_WATCHDOG"
 #: The name of the counts in a test report's user_properties.
 PROPERTY = "real_time_runs"
 
@@ -211,13 +215,43 @@ def rig_stall_trip(done: subprocess.CompletedProcess, folders: list[Path], limit
     return None
 
 
+def watchdog_arm_refusal(done: subprocess.CompletedProcess, folders: list[Path], watchdog_s: float) -> str | None:
+    """What ``can.log`` shows when ``done`` was refused at arming on the drive's heartbeat watchdog, which the
+    loop's heartbeats never gave cause for; else None.
+
+    Inside User-Mode Linux the loop and the rig run at SCHED_FIFO on one virtual CPU, and the kernel's network
+    work (ksoftirqd, normal scheduling) waits while they run: a run here saw the harness's heartbeats reach the
+    rig's socket 0.3-0.7 s after they were sent, every 10 ms, and the virtual drive, seeing none for longer than
+    its watchdog, latched HEARTBEAT_WATCHDOG before arming (the rig's own log, 29 Nov 2026). The drive did its
+    job on what reached it; the run says nothing about the path under test. The run's ``can.log`` tells that from
+    a harness that went silent: the heartbeats it sent have no gap as long as ``watchdog_s``.
+    """
+    output = _output(done)
+    if done.returncode != exit_codes.INPUT_ERROR or ARM_REFUSAL not in output or WATCHDOG_FAULT not in output:
+        return None
+    heartbeat_id = load_protocol()["HEARTBEAT"].frame_id
+    for folder in folders:
+        log = folder / "can.log"
+        if not log.is_file():
+            continue
+        sent = np.array([f.timestamp for f in read_can_log(log) if not f.rx and f.arbitration_id == heartbeat_id])
+        if len(sent) >= 2 and np.diff(sent).max() < watchdog_s:
+            return (f"the drive latched {WATCHDOG_FAULT} before arming while the loop sent {len(sent)} heartbeats, "
+                    f"none more than {np.diff(sent).max() * 1e3:.1f} ms apart (watchdog {watchdog_s * 1e3:.0f} ms)")
+    return None
+
+
 def _output(done: subprocess.CompletedProcess) -> str:
     return f"{done.stdout or ''}{done.stderr or ''}"
 
 
-def _emulator_stall(done: subprocess.CompletedProcess, folders: list[Path], limit_s: float) -> str | None:
-    """A trip the emulator's stall made (:func:`host_stall_trip`, :func:`rig_stall_trip`), described; else None."""
-    return host_stall_trip(done, folders) or rig_stall_trip(done, folders, limit_s)
+def _emulator_stall(
+    done: subprocess.CompletedProcess, folders: list[Path], limit_s: float, watchdog_s: float | None,
+) -> str | None:
+    """A trip or a refusal to arm the emulator's stall made (:func:`host_stall_trip`, :func:`rig_stall_trip`,
+    :func:`watchdog_arm_refusal` where the test gives the drive's watchdog), described; else None."""
+    return (host_stall_trip(done, folders) or rig_stall_trip(done, folders, limit_s)
+            or (watchdog_arm_refusal(done, folders, watchdog_s) if watchdog_s is not None else None))
 
 
 def _set_aside(log_dir: Path, before: set[Path]) -> None:
@@ -233,7 +267,7 @@ def _set_aside(log_dir: Path, before: set[Path]) -> None:
 def run_real_time(
     attempt: Callable[[], subprocess.CompletedProcess], *, log_dir: Path, rate_hz: float, stall_budget_s: float,
     what: str, wait: Callable[[float, float], QuietWait] = wait_for_quiet_second, records: list[RealTimeRecord] = RECORDS,
-    retry_host_stalls: bool = False, max_runs: int = MAX_RUNS,
+    retry_host_stalls: bool = False, max_runs: int = MAX_RUNS, drive_watchdog_s: float | None = None,
 ) -> subprocess.CompletedProcess:
     """Run ``attempt`` after a quiet second; run it again while the pre-flight refuses it (module docstring).
 
@@ -259,6 +293,10 @@ def run_real_time(
         reported like the refusals, within the same ``max_runs``.
     max_runs : int
         Runs at most: :data:`MAX_RUNS`, or more for a test whose host stalls more often (an emulator).
+    drive_watchdog_s : float, optional
+        The virtual drive's watchdog (s), given by a test in an emulator: with ``retry_host_stalls``, a refusal to
+        arm on its HEARTBEAT_WATCHDOG while the loop's heartbeats had no gap that long is run again too
+        (:func:`watchdog_arm_refusal`).
 
     Returns
     -------
@@ -274,7 +312,7 @@ def run_real_time(
         before = set(log_dir.iterdir()) if log_dir.is_dir() else set()
         done = attempt()
         record.runs += 1
-        stall = _emulator_stall(done, sorted(set(log_dir.iterdir()) - before), stall_budget_s) \
+        stall = _emulator_stall(done, sorted(set(log_dir.iterdir()) - before), stall_budget_s, drive_watchdog_s) \
             if retry_host_stalls and log_dir.is_dir() else None
         if stall is not None and record.runs < max_runs:
             record.host_stalls.append(stall[-300:])

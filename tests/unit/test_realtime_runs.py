@@ -289,3 +289,51 @@ def test_a_host_that_stalls_every_run_fails_after_the_most_runs(tmp_path):
                          records=records, retry_host_stalls=True)
     assert done.returncode == exit_codes.TRIPPED and attempts.made == realtime_runs.MAX_RUNS  # the last is the test's
     assert len(records[-1].host_stalls) == realtime_runs.MAX_RUNS - 1
+
+
+def _heartbeat_log(folder: Path, heartbeat_times_s) -> None:
+    """A candump ``can.log`` with the loop's HEARTBEAT frames (sent)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "can.log").write_text("".join(f"({1000.0 + t:.6f}) vcan0 050#0000 T\n" for t in heartbeat_times_s))
+
+
+WATCHDOG_REFUSAL = _done(
+    exit_codes.INPUT_ERROR,
+    err="error: could not arm within 3 s: arm refused: expected every pre-arm check to pass, failed: actuator_ready: "
+        "drive ready=False, fault=True, expected ready without fault; the drive reports a latched FAULT HEARTBEAT_WATCHDOG",
+)
+
+
+def test_a_watchdog_refusal_to_arm_is_the_emulators_only_when_the_heartbeats_never_stopped(tmp_path):
+    """CI in User-Mode Linux: refused at arming on HEARTBEAT_WATCHDOG while the loop sent a heartbeat every 10 ms."""
+    steady = tmp_path / "steady"
+    _heartbeat_log(steady, TICKS)
+    found = realtime_runs.watchdog_arm_refusal(WATCHDOG_REFUSAL, [steady], 0.5)
+    assert found is not None and "sent 100 heartbeats" in found and "none more than 10.0 ms apart" in found
+    silent = tmp_path / "silent"  # the loop's heartbeats stopped as long as the watchdog: a finding
+    _heartbeat_log(silent, np.concatenate([TICKS[TICKS < 0.2], TICKS[TICKS >= 0.2] + 0.5]))
+    assert realtime_runs.watchdog_arm_refusal(WATCHDOG_REFUSAL, [silent], 0.5) is None
+    other = _done(exit_codes.INPUT_ERROR, err="error: could not arm within 3 s: arm refused: stroke_centred")
+    assert realtime_runs.watchdog_arm_refusal(other, [steady], 0.5) is None
+    assert realtime_runs.watchdog_arm_refusal(_done(exit_codes.TRIPPED, out="HEARTBEAT_WATCHDOG"), [steady], 0.5) is None
+
+
+def test_a_watchdog_refusal_to_arm_is_run_again_only_where_the_test_gives_the_watchdog(tmp_path):
+    records: list[realtime_runs.RealTimeRecord] = []
+
+    class Refused(Attempts):
+        def __call__(self) -> subprocess.CompletedProcess:
+            done = super().__call__()
+            if done.returncode == exit_codes.INPUT_ERROR:
+                _heartbeat_log(self.log_dir / f"run{self.made}", TICKS)
+            return done
+
+    attempts = Refused(tmp_path / "logs", WATCHDOG_REFUSAL, _done(exit_codes.OK, out="completed"))
+    done = run_real_time(attempts, log_dir=tmp_path / "logs", rate_hz=100.0, stall_budget_s=0.08, what="a run",
+                         wait=_quiet, records=records, retry_host_stalls=True, drive_watchdog_s=0.5)
+    assert done.returncode == exit_codes.OK and attempts.made == 2
+    assert "latched HEARTBEAT_WATCHDOG before arming" in records[-1].host_stalls[0]
+    plain = Refused(tmp_path / "plain", WATCHDOG_REFUSAL, _done(exit_codes.OK, out="completed"))
+    done = run_real_time(plain, log_dir=tmp_path / "plain", rate_hz=100.0, stall_budget_s=0.08, what="a run",
+                         wait=_quiet, records=records, retry_host_stalls=True)
+    assert done.returncode == exit_codes.INPUT_ERROR and plain.made == 1  # no watchdog given: the test's to judge

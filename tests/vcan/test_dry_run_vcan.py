@@ -42,11 +42,12 @@ RT_STALL_BUDGET_S = 0.08  # safety.run.max_stall_s below
 #: (a CI run saw four runs in a row trip on it, each put on the emulator by its can.log), so a short run, more often.
 RT_DURATION_S = 3
 RT_MAX_RUNS = 8
+RT_DRIVE_WATCHDOG_S = 0.5  # rig.drive.watchdog_timeout_s below: above the stall budget and the sensor age
 SLOW_HOST_REAL_TIME = [
     "--pga", "0.1",
     "--set", "safety.stroke.stop_time_s=0.2", "--set", f"safety.run.max_stall_s={RT_STALL_BUDGET_S}",
     "--set", "safety.sensors.max_sensor_age_s=0.08", "--set", "safety.actuator.max_status_age_s=0.1",
-    "--set", "rig.drive.watchdog_timeout_s=0.5",
+    "--set", f"rig.drive.watchdog_timeout_s={RT_DRIVE_WATCHDOG_S}",
     "--allow-weaker-safety",  # the stall budget and the ages above are weaker than the profile's (docs/SAFETY.md)
 ]
 ACTUATOR_STATUS_ID = 0x40
@@ -155,14 +156,17 @@ def test_real_time_dry_run_across_processes_over_vcan0(vcan_channel, tmp_path):
     second (a bare 100 Hz loop in the same UML shows none, with or without an fsync each second), and one of
     81 ms against the 80 ms budget tripped a CI run; the trip is the supervisor's job done, the emulator's stall
     says nothing of the SocketCAN path. So, last, is a ``sensor_stale`` trip while the rig's process was not run:
-    a run here saw the rig's frames stop 159 ms, its commands going on every 10 ms (tests/realtime_runs.py tells the two apart
-    from the run's own can.log, and counts and reports each).
+    a run here saw the rig's frames stop 159 ms, its commands going on every 10 ms. And a refusal to arm on the
+    virtual drive's HEARTBEAT_WATCHDOG while the loop sent its heartbeats every 10 ms: with both processes at
+    SCHED_FIFO on the one virtual CPU, the kernel's network work waits, and a run here saw the heartbeats reach
+    the rig's socket 0.3-0.7 s after they were sent (tests/realtime_runs.py tells each from a fault of the path
+    by the run's own can.log, and counts and reports it).
     """
     command = ("dry-run", "--interface", "socketcan", "--channel", vcan_channel, "--rate", RT_RATE_HZ, "--quiet",
                "--duration", str(RT_DURATION_S), "--log-dir", str(tmp_path), *SLOW_HOST_REAL_TIME)
     done = run_real_time(lambda: _harness(*command), log_dir=tmp_path, rate_hz=float(RT_RATE_HZ),
                          stall_budget_s=RT_STALL_BUDGET_S, what=f"harness dry-run on {vcan_channel} at {RT_RATE_HZ} Hz",
-                         retry_host_stalls=True, max_runs=RT_MAX_RUNS)
+                         retry_host_stalls=True, max_runs=RT_MAX_RUNS, drive_watchdog_s=RT_DRIVE_WATCHDOG_S)
     assert done.returncode == exit_codes.OK, done.stdout[-3000:] + done.stderr[-2000:]
     folder = _only_folder(tmp_path)
     metadata = json.loads((folder / "metadata.json").read_text())
