@@ -5,6 +5,7 @@ No run and no wall clock here: the attempts are made-up finished processes and t
 
 from __future__ import annotations
 
+import functools
 import os
 import subprocess
 from pathlib import Path
@@ -264,17 +265,28 @@ def test_a_sensor_stale_trip_is_the_rigs_stall_only_when_its_frames_stopped_and_
     assert realtime_runs.rig_stall_trip(_done(exit_codes.OK, out="completed"), [rig_stopped], 0.08) is None
 
 
+class LoggingAttempts(Attempts):
+    """As :class:`Attempts`; a run that ends with ``status`` gets a ``can.log`` from ``write(folder)``."""
+
+    def __init__(self, log_dir: Path, status: int, write, *done: subprocess.CompletedProcess) -> None:
+        super().__init__(log_dir, *done)
+        self.status, self.write = status, write
+
+    def __call__(self) -> subprocess.CompletedProcess:
+        done = super().__call__()
+        if done.returncode == self.status:
+            self.write(self.log_dir / f"run{self.made}")
+        return done
+
+
+def _rig_stopped(folder: Path) -> None:
+    _can_log(folder, TICKS[(TICKS < 0.4) | (TICKS > 0.55)], TICKS)
+
+
 def test_a_rig_stall_trip_is_run_again_where_the_test_asks(tmp_path):
     records: list[realtime_runs.RealTimeRecord] = []
-
-    class RigStalls(Attempts):
-        def __call__(self) -> subprocess.CompletedProcess:
-            done = super().__call__()
-            if done.returncode == exit_codes.TRIPPED:
-                _can_log(self.log_dir / f"run{self.made}", TICKS[(TICKS < 0.4) | (TICKS > 0.55)], TICKS)
-            return done
-
-    attempts = RigStalls(tmp_path / "logs", STALE, _done(exit_codes.OK, out="completed"))
+    attempts = LoggingAttempts(tmp_path / "logs", exit_codes.TRIPPED, _rig_stopped, STALE,
+                               _done(exit_codes.OK, out="completed"))
     done = run_real_time(attempts, log_dir=tmp_path / "logs", rate_hz=100.0, stall_budget_s=0.08, what="a run",
                          wait=_quiet, records=records, retry_host_stalls=True)
     assert done.returncode == exit_codes.OK and attempts.made == 2
@@ -320,20 +332,15 @@ def test_a_watchdog_refusal_to_arm_is_the_emulators_only_when_the_heartbeats_nev
 
 def test_a_watchdog_refusal_to_arm_is_run_again_only_where_the_test_gives_the_watchdog(tmp_path):
     records: list[realtime_runs.RealTimeRecord] = []
-
-    class Refused(Attempts):
-        def __call__(self) -> subprocess.CompletedProcess:
-            done = super().__call__()
-            if done.returncode == exit_codes.INPUT_ERROR:
-                _heartbeat_log(self.log_dir / f"run{self.made}", TICKS)
-            return done
-
-    attempts = Refused(tmp_path / "logs", WATCHDOG_REFUSAL, _done(exit_codes.OK, out="completed"))
+    steady = functools.partial(_heartbeat_log, heartbeat_times_s=TICKS)
+    attempts = LoggingAttempts(tmp_path / "logs", exit_codes.INPUT_ERROR, steady, WATCHDOG_REFUSAL,
+                               _done(exit_codes.OK, out="completed"))
     done = run_real_time(attempts, log_dir=tmp_path / "logs", rate_hz=100.0, stall_budget_s=0.08, what="a run",
                          wait=_quiet, records=records, retry_host_stalls=True, drive_watchdog_s=0.5)
     assert done.returncode == exit_codes.OK and attempts.made == 2
     assert "latched HEARTBEAT_WATCHDOG before arming" in records[-1].host_stalls[0]
-    plain = Refused(tmp_path / "plain", WATCHDOG_REFUSAL, _done(exit_codes.OK, out="completed"))
+    plain = LoggingAttempts(tmp_path / "plain", exit_codes.INPUT_ERROR, steady, WATCHDOG_REFUSAL,
+                            _done(exit_codes.OK, out="completed"))
     done = run_real_time(plain, log_dir=tmp_path / "plain", rate_hz=100.0, stall_budget_s=0.08, what="a run",
                          wait=_quiet, records=records, retry_host_stalls=True)
     assert done.returncode == exit_codes.INPUT_ERROR and plain.made == 1  # no watchdog given: the test's to judge
