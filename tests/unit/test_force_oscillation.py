@@ -232,6 +232,24 @@ def test_a_load_cell_sampled_at_250_hz_that_limit_cycles_still_fires_when_its_wi
     assert all(fired[first:]), "and the check stays active on the ticks between samples"
 
 
+def test_between_load_cell_samples_an_rms_equal_to_the_limit_is_still_within_it() -> None:
+    """The ticks between samples judge the RMS of the last sample by the same rule: acts only above the limit."""
+    sample_dt = STATUS_EVERY * FAST_DT
+    amplitude = 2.0 * CONFIG.oscillation_limit_N * math.sqrt(2) / _gain(LIMIT_CYCLE_HZ, dt=sample_dt)
+    cycle = lambda t: amplitude * math.sin(2.0 * math.pi * LIMIT_CYCLE_HZ * t)  # noqa: E731
+    reference = ForceOscillation(dataclasses.replace(CONFIG, oscillation_limit_N=1e9))
+    _held_load_cell(reference, 0.3, cycle)
+    at_peak = ForceOscillation(dataclasses.replace(CONFIG, oscillation_limit_N=reference.peak_rms_N))
+    health, held, fired = TickHealth(), 0.0, []
+    for k in range(int(0.3 / FAST_DT)):
+        health.actuator_status_fresh = k % STATUS_EVERY == 0
+        if health.actuator_status_fresh:
+            held = cycle(k * FAST_DT)
+        health.measured_force_N = held
+        fired.append(at_peak.update(k * FAST_DT, FAST_DT, health))
+    assert at_peak.peak_rms_N == reference.peak_rms_N and not any(fired)
+
+
 def test_a_load_cell_not_finite_fires_on_a_tick_without_a_new_sample_too() -> None:
     detector, health = ForceOscillation(CONFIG), TickHealth()
     assert not detector.update(0.0, FAST_DT, health)
