@@ -66,6 +66,16 @@ def test_the_command_never_exceeds_max_force_plus_max_flow_term_and_the_flow_ter
     assert clamp.apply_compensated(9000.0, 12_000.0) == 12_000.0
 
 
+def test_the_compensated_clamps_detail_states_the_setpoint_the_addition_and_the_command_sent() -> None:
+    clamp = ForceClamp(FORCE)
+    setpoint, command = 9_000.0, 9_000.0 + FLOW + 1_500.0
+    detail = clamp.detail(command, setpoint)
+    assert detail.startswith(f"setpoint 9000 N within +/-{MAX:g} N (safety.force.max_force_N)")
+    assert f"compensator's addition {FLOW + 1_500.0:.6g} N within +/-{FLOW:g} N (safety.force.max_flow_term_N)" in detail
+    assert detail.endswith(f"command {command:.6g} N clamped to {9_000.0 + FLOW:.6g} N")
+    assert clamp.detail(-12_000.0) == f"demanded -12000 N, clamped to +/-{MAX:g} N (safety.force.max_force_N)"
+
+
 def test_the_supervisor_bounds_a_compensated_command_by_its_setpoint_and_flow_term() -> None:
     supervisor, health = armed_supervisor()
     force = 0.0
