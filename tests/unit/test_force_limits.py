@@ -148,6 +148,24 @@ def test_the_profile_must_put_the_load_cell_limit_above_max_force_and_the_comman
     supply = MAX + FLOW
     assert not any("max_flow_term_N" in p for p in problems(supply_force_N=supply))
     assert any("max_flow_term_N" in p for p in problems(supply_force_N=supply - 1.0))
+    [refusal] = [p for p in problems(supply_force_N=supply - 1.0) if "max_flow_term_N" in p]
+    assert refusal == (
+        f"force.max_force_N + force.max_flow_term_N ({supply:g} N) exceeds force.supply_force_N ({supply - 1.0:g} N): "
+        "the command would ask a blocked piston for more than the cylinder gives, a flow the valve cannot pass "
+        "(docs/SAFETY.md, What max_force_N must bound)"
+    )
+
+
+def test_a_tracking_tolerance_of_twice_max_force_is_refused_and_just_below_it_is_not() -> None:
+    def problems(tolerance_N: float) -> list[str]:
+        force = dataclasses.replace(FORCE, tracking_tolerance_N=tolerance_N, load_cell_limit_N=MAX + tolerance_N + 1.0)
+        return [p for p in check_config(SafetyConfig(force=force)) if "tracking_tolerance_N" in p]
+
+    assert problems(2 * MAX) == [
+        f"force.tracking_tolerance_N ({2 * MAX:g} N) is at least twice force.max_force_N ({MAX:g} N): "
+        "the tracking detector could never act"
+    ]
+    assert problems(2 * MAX - 1.0) == []
 
 
 def test_load_cell_limits_detail_word_for_word_and_its_peak_from_zero() -> None:

@@ -171,3 +171,45 @@ def test_the_checks_detail_lines_name_the_evaluation_they_act_on() -> None:
     assert marginal.detail(None) == (check.measures_text(latest=True)
                                      + "; the table follows the told record, but not as a healthy table does")
     assert mismatch.detail(None) == check.measures_text() + "; the table does not play the record the harness was told"
+
+
+def test_ticks_before_the_first_update_are_held_at_rest() -> None:
+    """A first update a few ticks into the record (the table reported late) fills the ticks before it at rest."""
+    told = _random()
+    table = _random(seed=11)
+    table[:3] = 0.0
+    from_start, late = TableRecordCheck(0.02), TableRecordCheck(0.02)
+    for check in (from_start, late):
+        check.expect(told, DT, (told.size - 1) * DT, DT)
+    for n, value in enumerate(table):
+        from_start.update(n * DT, float(value))
+        if n >= 3:
+            late.update(n * DT, float(value))
+    assert late.evaluations == from_start.evaluations > 0
+    assert late.worst_measures == from_start.worst_measures
+
+
+def test_at_the_records_end_the_gates_own_sample_is_needed_for_a_verdict() -> None:
+    told = _random()
+    for samples, evaluations in ((None, 0), (1, 2)):
+        check = TableRecordCheck(0.02)
+        check.expect(told, DT, (told.size - 1) * DT, DT)
+        assert check.gate is not None and check.tracking is not None
+        for n in range(check.gate + (samples or 0)):
+            check.update(n * DT, float(told[n]))
+        check.update(check.tracking.length * DT, 0.0)  # past the record's end: the last judgement
+        assert check.evaluations == evaluations, f"{check.gate + (samples or 0)} samples, the gate at {check.gate}"
+        assert (check.verdict is TableVerdict.WAITING) == (evaluations == 0)
+
+
+def test_a_loop_slower_than_the_evaluation_period_judges_on_every_tick_after_the_gate() -> None:
+    """At 1 Hz (a tick longer than EVALUATE_EVERY_S, 0.5 s) each tick from the gate on is one evaluation."""
+    record_dt, seconds = 0.01, 120.0
+    told = 0.1 * np.sin(2 * np.pi * 0.13 * np.arange(0.0, seconds, record_dt))
+    check = TableRecordCheck(0.0)
+    check.expect(told, record_dt, seconds - record_dt, 1.0)
+    assert check.gate is not None and check.tracking is not None
+    ticks = check.tracking.length
+    for n in range(ticks):
+        check.update(float(n), float(told[min(int(n / record_dt), told.size - 1)]))
+    assert check.evaluations == ticks - check.gate  # updates from the gate's own tick on
