@@ -37,13 +37,14 @@ and prints one summary line at the end of the stage, so retries are seen even wh
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import shutil
 import signal
 import subprocess
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -55,7 +56,7 @@ from harness import exit_codes
 from harness.loop.preflight import HostTiming, measure_host_timing
 from harness.loop.timing import GAP_PART_WORDS
 from harness.realtime.host import AUTO, Scheduling, request_fifo, restore_scheduling
-from harness.replay.canlog import read_can_log
+from harness.replay.canlog import LoggedFrame, read_can_log
 
 #: Runs of one test at most: the first and the retries of runs the pre-flight refused.
 MAX_RUNS = 5
@@ -196,11 +197,7 @@ def rig_stall_trip(done: subprocess.CompletedProcess, folders: list[Path], limit
     protocol = load_protocol(fd=True)  # the FD protocol names both the classic table frame and the FD sensor set
     sensor_ids = {protocol[name].frame_id for name in ("TABLE_SENSORS", "SENSOR_SET")}
     command_id = protocol["ACTUATOR_CMD"].frame_id
-    for folder in folders:
-        log = folder / "can.log"
-        if not log.is_file():
-            continue
-        frames = read_can_log(log)
+    for frames in _run_frames(folders):
         received = np.array([f.timestamp for f in frames if f.rx and f.arbitration_id in sensor_ids])
         sent = np.array([f.timestamp for f in frames if not f.rx and f.arbitration_id == command_id])
         if len(received) < 2 or len(sent) < 2:
@@ -230,15 +227,21 @@ def watchdog_arm_refusal(done: subprocess.CompletedProcess, folders: list[Path],
     if done.returncode != exit_codes.INPUT_ERROR or ARM_REFUSAL not in output or WATCHDOG_FAULT not in output:
         return None
     heartbeat_id = load_protocol()["HEARTBEAT"].frame_id
+    for frames in _run_frames(folders):
+        sent = np.array([f.timestamp for f in frames if not f.rx and f.arbitration_id == heartbeat_id])
+        longest_s = float(np.diff(sent).max()) if len(sent) >= 2 else math.inf
+        if longest_s < watchdog_s:
+            return (f"the drive latched {WATCHDOG_FAULT} before arming while the loop sent {len(sent)} heartbeats, "
+                    f"none more than {longest_s * 1e3:.1f} ms apart (watchdog {watchdog_s * 1e3:.0f} ms)")
+    return None
+
+
+def _run_frames(folders: list[Path]) -> Iterator[list[LoggedFrame]]:
+    """The frames of each run folder's ``can.log``, for the folders that have one."""
     for folder in folders:
         log = folder / "can.log"
-        if not log.is_file():
-            continue
-        sent = np.array([f.timestamp for f in read_can_log(log) if not f.rx and f.arbitration_id == heartbeat_id])
-        if len(sent) >= 2 and np.diff(sent).max() < watchdog_s:
-            return (f"the drive latched {WATCHDOG_FAULT} before arming while the loop sent {len(sent)} heartbeats, "
-                    f"none more than {np.diff(sent).max() * 1e3:.1f} ms apart (watchdog {watchdog_s * 1e3:.0f} ms)")
-    return None
+        if log.is_file():
+            yield read_can_log(log)
 
 
 def _output(done: subprocess.CompletedProcess) -> str:
