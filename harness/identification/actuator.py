@@ -34,6 +34,7 @@ from harness.identification.actuator_fit import (
     VELOCITY_FILE,
     ActuatorFit,
     ActuatorParameters,
+    CommandPath,
     Measured,
     blocked_response,
     bulk_modulus_Pa,
@@ -78,8 +79,18 @@ def loop_delay_s(profile: Profile, lockstep: bool) -> float:
     return delay
 
 
-def read_measured(out_dir: Path, segments: float) -> Measured:
-    """The responses in ``out_dir``.
+def command_path(excitation: dict, rate_hz: float, profile: Profile) -> CommandPath:
+    """The loop's hold, and a chirp's amplitude with the servo controller's rate limit (:class:`.actuator_fit.CommandPath`).
+
+    Only a chirp is, at each moment, the sinusoid the orifice's describing function and the rate
+    limit's lag are taken for: another signal's amplitude is given as 0.
+    """
+    amplitude_N = float(excitation["amplitude_N"]) if excitation.get("signal") == "chirp" else 0.0
+    return CommandPath(amplitude_N, 1.0 / rate_hz, profile.rig.physics_substep_s, profile.rig.actuator.force_rate_limit_N_per_s)
+
+
+def read_measured(out_dir: Path, segments: float, command: CommandPath | None = None) -> Measured:
+    """The responses in ``out_dir``; ``command`` a chirp's (:attr:`.Measured.command`).
 
     Raises
     ------
@@ -95,7 +106,7 @@ def read_measured(out_dir: Path, segments: float) -> Measured:
         free, velocity = read_frf_csv(out_dir / FREE_FILE), read_frf_csv(out_dir / VELOCITY_FILE)
     if blocked is None and free is None:
         raise IdentificationError(f"{out_dir}: found no {BLOCKED_FILE} or {FREE_FILE}; expected a measured condition to fit")
-    return Measured(blocked, free, velocity, segments)
+    return Measured(blocked, free, velocity, segments, command)
 
 
 def identify_actuator_fit(out_dir: Path, profile: Profile, lockstep: bool) -> ActuatorIdentification:
@@ -115,7 +126,7 @@ def identify_actuator_fit(out_dir: Path, profile: Profile, lockstep: bool) -> Ac
     rate_hz = float(record["rate_hz"])
     segment_s = 1.0 / float(excitation["resolution_hz"])
     segments = max(1.0, 2.0 * float(excitation["duration_s"]) / segment_s - 1.0)  # Welch, 50 % overlap
-    measured = read_measured(out_dir, segments)
+    measured = read_measured(out_dir, segments, command_path(excitation, rate_hz, profile))
     hydraulics = profile.rig.actuator.hydraulics
     loop_s = loop_delay_s(profile, lockstep)
     start = ActuatorParameters.from_config(
@@ -143,7 +154,8 @@ def identify_actuator_fit(out_dir: Path, profile: Profile, lockstep: bool) -> Ac
     plot = fit_plot(measured, fit, out_dir / FIT_PLOT_FILE, f"{profile.name}: actuator, measured and fitted (SPEC 7a)")
     content = {
         "kind": "actuator", "profile": profile.name, "lockstep": lockstep, "rate_hz": rate_hz, "excitation": excitation,
-        "model": "SPEC 7a linearised: F = [exp(-s tau) w_f G_v u_c - k_h xdot_b] / (s + c + w_f G_v)",
+        "model": "SPEC 7a: F = [exp(-s tau) R N w_f G_v u_c - k_h (1 - alpha N G_v H) xdot_b] / (s + c + N w_f G_v)",
+        "large_signal": _large_signal_json(measured.command, fit.parameters),
         "parameters": {name: {"value": getattr(fit.parameters, name), "standard_error": fit.standard_errors.get(name),
                               "fitted": name in fit.fitted, "determined": fit.determined(name)} for name in FITTED},
         "held": {name: {"value": getattr(fit.parameters, name, None), "why": why} for name, why in held.items()},
@@ -158,6 +170,20 @@ def identify_actuator_fit(out_dir: Path, profile: Profile, lockstep: bool) -> Ac
             if entry.get("frf_file") and (out_dir / entry["run_folder"]).is_dir()]
     record_path = write_record(out_dir, "identify actuator", runs, content)
     return ActuatorIdentification(fit, overlay, record_path, plot, held)
+
+
+def _large_signal_json(command: CommandPath | None, p: ActuatorParameters) -> dict[str, object]:
+    """What the model's ``N`` (the orifice's describing function) and ``R`` (the hold and rate limit) were taken from."""
+    if command is None:
+        return {"orifice": "none (small signal)", "command": "continuous"}
+    chirp = command.amplitude_N > 0.0
+    return {
+        "orifice": f"describing function at the chirp's {command.amplitude_N:g} N over A p_s = {p.force_capacity_N:.5g} N"
+                   if chirp else "none (small signal: the excitation is no sinusoid)",
+        "command": f"held over the loop's {command.tick_s * 1e3:g} ms"
+                   + (f", rate limited at {command.rate_limit_N_per_s:g} N/s per {command.sample_s * 1e3:g} ms sample"
+                      if chirp and math.isfinite(command.rate_limit_N_per_s) else ""),
+    }
 
 
 def _quality(fit: ActuatorFit, name: str, unit_scale: float = 1.0) -> str:
@@ -196,9 +222,9 @@ def fitted_responses(measured: Measured, fit: ActuatorFit) -> dict[str, tuple[Fr
     """Per condition: the measured response and the fitted model on its bins (complex)."""
     out: dict[str, tuple[FrequencyResponse, np.ndarray]] = {}
     if measured.blocked is not None:
-        out["blocked"] = (measured.blocked, blocked_response(fit.parameters, measured.blocked.freq_hz))
+        out["blocked"] = (measured.blocked, blocked_response(fit.parameters, measured.blocked.freq_hz, measured.command))
     if measured.free is not None and measured.velocity is not None:
-        model = free_response(fit.parameters, measured.free.freq_hz, complex_response(measured.velocity))
+        model = free_response(fit.parameters, measured.free.freq_hz, complex_response(measured.velocity), measured.command)
         out["free"] = (measured.free, model)
     return out
 

@@ -1,21 +1,39 @@
 """The control actuator's model (SPEC 7a) fitted to its measured frequency responses.
 
-Linearised about zero load pressure (the orifice's ``sqrt((p_s - sign(x_v) p_L) / p_s)`` is
-within 7 % of 1 at the 2 kN excitation), the servo-valve driven cylinder under its force loop
-(:mod:`harness.hydraulics.cylinder`) gives, with the loop's gain on a blocked piston
-``w_f = K_p (4 beta_e / V_t) A q_nl`` and the valve ``G_v(s) = w_v^2 / (s^2 + 2 zeta_v w_v s + w_v^2)``::
+The servo-valve driven cylinder under its force loop (:mod:`harness.hydraulics.cylinder`) gives,
+with the loop's gain on a blocked piston ``w_f = K_p (4 beta_e / V_t) A q_nl`` and the valve
+``G_v(s) = w_v^2 / (s^2 + 2 zeta_v w_v s + w_v^2)``::
 
-    F = [w_f G_v(s) u_c - k_h xdot_b] / D(s),     D(s) = s + c + w_f G_v(s)        (F1)
+    F = [N w_f G_v(s) u_c - k_h xdot_b] / D(s),     D(s) = s + c + N w_f G_v(s)        (F1)
+
+``N`` is the orifice's describing function (:func:`orifice_describing_function`): the valve
+passes ``q_nl x_v sqrt(1 - sign(x_v) p_L / p_s)``, less flow while the force grows away from
+zero and more while it returns, so a sinusoid of force amplitude ``F_0`` sees the loop's gain
+times ``N = 1 - O(x^2) + j 2 x / (3 pi)`` (``x = F_0 / (A p_s)``, the spool in quadrature
+with the force): a loss of magnitude ``(w / w_f) 2 x / (3 pi)``, 1-3 % over a 1-30 Hz chirp at
+2 kN on the shipped 15 kN actuator, which the small-signal model (``N = 1``) would read as a
+3 % lower ``w_f``. With a chirp (:attr:`Measured.command`) each bin is the
+quasi-steady sinusoid at its frequency, and ``N`` is found with the force and spool phasors
+it gives (a fixed point, :data:`DESCRIBING_ITERATIONS`); a random excitation is fitted with
+``N = 1`` (its amplitude is no sinusoid's).
+
+The command reaches the force loop through the servo controller's command rate limit
+(``rig.actuator.force_rate_limit_N_per_s``, applied once per controller sample): the loop's
+staircase jumps by up to ``2 pi f A T`` per tick, 700 N at 28 Hz and 2 kN in a 2 ms tick,
+which a 500 kN/s limit spreads over three 0.5 ms samples. That is a lag growing with frequency
+and amplitude (3.9 deg at 28.6 Hz here) that no linear term holds; with a chirp it is taken
+per bin from the staircase itself (:class:`CommandPath`), before the fit, since it depends on
+no fitted value.
 
 ``k_h = 4 beta_e A^2 / V_t`` the hydraulic stiffness, ``c = k_h C_l / A^2`` the leakage's
 pole. What the loop records adds a delay ``tau`` between the command and the load cell (the
 command's transport, the status frame's period, the hold of the command over a tick).
 
-- **Blocked** (``xdot_b = 0``): ``H_b = e^{-s tau} w_f G_v / D``.
+- **Blocked** (``xdot_b = 0``): ``H_b = e^{-s tau} N w_f G_v / D``.
 - **Free**: the base mat moves, ``xdot_b`` answers the force through the structure, its
   bearings' friction and the table. Taking the cross-spectrum of (F1) with the command gives,
   exactly and whatever moves the base mat (friction included),
-  ``H_free = e^{-s tau} (w_f G_v - k_h T) / D`` with ``T`` the measured response from the
+  ``H_free = (e^{-s tau} N w_f G_v - k_h T) / D`` with ``T`` the measured response from the
   command to the sliding velocity (:data:`VELOCITY_FILE`). No model of the structure is
   needed: the free condition adds ``k_h`` alone.
 
@@ -79,6 +97,15 @@ HELD = {
 }
 #: Relative standard error above which a fitted value counts as not determined by the data.
 DETERMINED_REL_ERROR = 0.1
+#: Points over a period at which :func:`orifice_describing_function` takes the first harmonic.
+DESCRIBING_POINTS = 128
+#: Fixed-point iterations for the describing function (it moves the phasors by about ``x / 5``:
+#: each iteration multiplies the change by about that, 0.03 at the shipped 2 kN).
+DESCRIBING_ITERATIONS = 4
+_PHASE = np.exp(2j * np.pi * np.arange(DESCRIBING_POINTS) / DESCRIBING_POINTS)
+#: Ticks of the staircase over which :meth:`CommandPath.factor` takes the first harmonics (4 s at
+#: 500 Hz: five periods of the lowest 1.2 Hz bin).
+RATE_LIMIT_TICKS = 2000
 
 
 @dataclass(frozen=True)
@@ -106,6 +133,10 @@ class ActuatorParameters:
     feedforward_filter_hz, feedforward_delay_s : float
         The feed-forward's LVDT filter corner (Hz) and delay (s, the LVDT's and half a sample of
         the backward difference): the servo controller's settings, held.
+    force_capacity_N : float
+        ``A p_s`` (N), the cylinder's force with the whole supply across the piston: the scale of
+        the orifice's describing function (held: the supply pressure and the piston are the
+        equipment's, known; ``inf``: the small-signal model).
     """
 
     force_loop_bandwidth_hz: float
@@ -118,6 +149,7 @@ class ActuatorParameters:
     feedforward_gain: float = 0.0
     feedforward_filter_hz: float = math.inf
     feedforward_delay_s: float = 0.0
+    force_capacity_N: float = math.inf
 
     @classmethod
     def from_config(cls, hydraulics: HydraulicActuatorConfig, delay_s: float, velocity_lag_s: float = 0.0,
@@ -133,6 +165,7 @@ class ActuatorParameters:
             c.hydraulic_stiffness_N_per_m,
             linear.leakage_pole_per_s(c.hydraulic_stiffness_N_per_m, c.leakage_m3_per_s_Pa, c.piston_area_m2),
             velocity_lag_s, feedforward.gain, feedforward.velocity_filter_hz, feedforward.lvdt.delay_s + 0.5 * sample_s,
+            c.force_capacity_N,
         )
 
     def velocity_feedback_Ns_per_m(self) -> float:
@@ -154,56 +187,107 @@ class ActuatorParameters:
         return dataclasses.replace(self, **dict(zip(FITTED, (float(v) for v in values), strict=True)))
 
 
-def _loop_terms(p: ActuatorParameters, freq_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(w_f G_v, D, e^{-s tau})`` at ``s = j 2 pi f``."""
-    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+def _valve(p: ActuatorParameters, s: np.ndarray) -> np.ndarray:
+    """``G_v(s)``."""
     w_v = linear.angular_frequency_rad_s(p.valve_bandwidth_hz)
-    valve = w_v**2 / (s**2 + 2.0 * p.valve_damping_ratio * w_v * s + w_v**2)
-    gain = p.bandwidth_rad_s() * valve
-    return gain, s + p.leakage_pole_per_s + gain, np.exp(-s * p.delay_s)
+    return w_v**2 / (s**2 + 2.0 * p.valve_damping_ratio * w_v * s + w_v**2)
 
 
-def blocked_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
-    """``H_b(j w)``: command to recorded load cell with the piston held (N/N, complex)."""
-    gain, denominator, delay = _loop_terms(p, freq_hz)
-    return delay * gain / denominator
+def _feedforward_stiffness(p: ActuatorParameters, s: np.ndarray) -> np.ndarray:
+    """``alpha k_h G_v H``: the flow demand the servo controller's feed-forward adds per m of stroke (N/m, complex).
 
-
-def _bleed_stiffness(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
-    """``k_h (1 - alpha G_v H)``: the oil column's velocity feedback less the servo controller's feed-forward (N/m, complex).
-
-    ``H`` is the feed-forward's LVDT delay and first-order filter (SPEC 7a'); 1 for a plain loop.
+    ``H`` is the feed-forward's LVDT delay and first-order filter (SPEC 7a'); 0 for a plain loop.
     """
     if p.feedforward_gain == 0.0:
-        return np.full(np.shape(freq_hz), p.hydraulic_stiffness_N_per_m, dtype=complex)
-    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
-    w_v = linear.angular_frequency_rad_s(p.valve_bandwidth_hz)
-    valve = w_v**2 / (s**2 + 2.0 * p.valve_damping_ratio * w_v * s + w_v**2)
+        return np.zeros(np.shape(s), dtype=complex)
     sensed = np.exp(-s * p.feedforward_delay_s) / (1.0 + s / (2.0 * np.pi * p.feedforward_filter_hz))
-    return p.hydraulic_stiffness_N_per_m * (1.0 - p.feedforward_gain * valve * sensed)
+    return p.feedforward_gain * p.hydraulic_stiffness_N_per_m * _valve(p, s) * sensed
+
+
+def orifice_describing_function(demand: np.ndarray, force_N: np.ndarray, capacity_N: float) -> np.ndarray:
+    """The valve's flow per spool opening at its first harmonic, relative to no load (complex, per bin).
+
+    The spool ``x_v = Re(X e^{j theta})`` (any scale: ``demand`` is proportional to it) passes
+    ``q_nl x_v sqrt(1 - sign(x_v) p_L / p_s)`` with ``A p_L = Re(F e^{j theta})``;
+    ``N = Q_1 / X``, ``Q_1`` the flow's first harmonic over :data:`DESCRIBING_POINTS` points.
+    Past the supply (``sign(x_v) p_L > p_s``) the valve passes nothing.
+
+    Parameters
+    ----------
+    demand : numpy.ndarray
+        Phasors proportional to the spool's (complex).
+    force_N : numpy.ndarray
+        Phasors of the cylinder's force ``A p_L`` (N, complex), same shape.
+    capacity_N : float
+        ``A p_s`` (N).
+    """
+    spool = np.real(np.multiply.outer(demand, _PHASE))
+    load = np.real(np.multiply.outer(force_N, _PHASE)) / capacity_N
+    flow = spool * np.sqrt(np.clip(1.0 - np.sign(spool) * load, 0.0, None))
+    first = 2.0 * np.mean(flow * np.conj(_PHASE), axis=-1)
+    safe = np.where(demand == 0, 1.0, demand)
+    return np.where(demand == 0, 1.0, first / safe)
+
+
+def _closed_loop(p: ActuatorParameters, freq_hz: np.ndarray, velocity: np.ndarray | None,
+                 command: CommandPath | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(N w_f G_v R e^{-s tau}, D, N)`` per bin; ``velocity``: the sliding velocity per N of command (None: blocked).
+
+    Without ``command`` (small signal) ``N`` and the rate limit's ``R`` are 1. With it, ``R`` is
+    :meth:`CommandPath.factor`, and ``N`` is iterated with the force and the spool's phasors the
+    loop gives at its amplitude (:func:`orifice_describing_function`; 1 for an infinite
+    ``p.force_capacity_N``).
+    """
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    gain = p.bandwidth_rad_s() * _valve(p, s)
+    reaching = np.exp(-s * p.delay_s) * (1.0 if command is None else command.factor(freq_hz))  # per N of command
+    amplitude_N = 0.0 if command is None else command.amplitude_N
+    stroke = np.zeros_like(s) if velocity is None else velocity
+    feedforward = _feedforward_stiffness(p, s) * stroke
+    describing = np.ones_like(s)
+    nonlinear = amplitude_N > 0.0 and math.isfinite(p.force_capacity_N)
+    for _ in range(DESCRIBING_ITERATIONS if nonlinear else 0):
+        denominator = s + p.leakage_pole_per_s + describing * gain
+        force = (describing * (gain * reaching + feedforward) - p.hydraulic_stiffness_N_per_m * stroke) / denominator
+        demand = gain * (reaching - force) + feedforward
+        describing = orifice_describing_function(demand * amplitude_N, force * amplitude_N, p.force_capacity_N)
+    return describing * gain * reaching, s + p.leakage_pole_per_s + describing * gain, describing
+
+
+def blocked_response(p: ActuatorParameters, freq_hz: np.ndarray, command: CommandPath | None = None) -> np.ndarray:
+    """``H_b(j w)``: command to recorded load cell with the piston held (N/N, complex).
+
+    ``command``: a chirp's, for the orifice's describing function and the rate limit; None: small signal.
+    """
+    path, denominator, _ = _closed_loop(p, freq_hz, None, command)
+    return path / denominator
 
 
 def velocity_feedback_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
-    """``k_h (1 - alpha G_v H) / D(j w)``: the force the sliding velocity bleeds, per m/s (N s/m, complex).
+    """``k_h (1 - alpha G_v H) / D(j w)``: the force the sliding velocity bleeds, per m/s (N s/m, complex; small signal).
 
     ``k_h / w_f`` at low frequency for a plain loop, ``(1 - alpha) k_h / w_f`` with the servo
     controller's velocity feed-forward. With :func:`blocked_response` it is the whole actuator of
     (F1), whatever it pushes.
     """
-    _, denominator, _ = _loop_terms(p, freq_hz)
-    return _bleed_stiffness(p, freq_hz) / denominator
+    _, denominator, _ = _closed_loop(p, freq_hz, None, None)
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    return (p.hydraulic_stiffness_N_per_m - _feedforward_stiffness(p, s)) / denominator
 
 
-def free_response(p: ActuatorParameters, freq_hz: np.ndarray, velocity_response: np.ndarray) -> np.ndarray:
+def free_response(p: ActuatorParameters, freq_hz: np.ndarray, velocity_response: np.ndarray,
+                  command: CommandPath | None = None) -> np.ndarray:
     """``H_free(j w)`` given the measured command-to-sliding-velocity response ``T`` (m/s per N, complex).
 
     The delay ``tau`` is the command's: the velocity bleeds the force where it is, so ``T`` enters
     as measured, advanced by the velocity sensors' delay relative to the load cell
-    (:attr:`ActuatorParameters.velocity_lag_s`).
+    (:attr:`ActuatorParameters.velocity_lag_s`). ``command`` as in :func:`blocked_response`.
     """
-    gain, denominator, delay = _loop_terms(p, freq_hz)
-    lead = np.exp(2j * np.pi * np.asarray(freq_hz, dtype=float) * p.velocity_lag_s)
-    return (delay * gain - _bleed_stiffness(p, freq_hz) * velocity_response * lead) / denominator
+    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    stroke = velocity_response * np.exp(s * p.velocity_lag_s)
+    path, denominator, describing = _closed_loop(p, freq_hz, stroke, command)
+    bleed = p.hydraulic_stiffness_N_per_m - describing * _feedforward_stiffness(p, s)
+    return (path - bleed * stroke) / denominator
 
 
 def complex_response(response: FrequencyResponse) -> np.ndarray:
@@ -218,6 +302,66 @@ def bin_weights(response: FrequencyResponse, segments: float) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class CommandPath:
+    """How the loop's command reaches the force loop: a staircase of the loop's period, rate limited.
+
+    Attributes
+    ----------
+    amplitude_N : float
+        The chirp's amplitude (N); 0 for an excitation that is no sinusoid (random): the
+        staircase's hold alone, no describing function, no rate limit.
+    tick_s : float
+        The loop's period (s): the command is a staircase of this step.
+    sample_s : float
+        The servo controller's sample period (s), at which its rate limit acts.
+    rate_limit_N_per_s : float
+        The servo controller's command rate limit (N/s); ``inf``: none.
+    """
+
+    amplitude_N: float
+    tick_s: float
+    sample_s: float
+    rate_limit_N_per_s: float = math.inf
+    _factors: dict[bytes, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
+
+    def factor(self, freq_hz: np.ndarray) -> np.ndarray:
+        """Per bin, the command reaching the loop over the sinusoid commanded, less the hold's half tick (complex).
+
+        The hold of a staircase of period ``T`` is ``sinc(f T) e^{-j pi f T}`` at its first
+        harmonic; the half tick is in the fit's delay, so the hold alone gives ``sinc(f T)``
+        (0.6 % at 30 Hz and 500 Hz). With a chirp's amplitude and a finite limit, the staircase
+        ``A sin(2 pi f k T)`` over :data:`RATE_LIMIT_TICKS` ticks is held over the controller's
+        samples and moved at most ``rate_limit_N_per_s * sample_s`` per sample, as the virtual
+        rig's servo controller does (:func:`harness.rig.actuator.slew_and_clamp`), and its first
+        harmonic is taken against the sinusoid's.
+        """
+        freq_hz = np.asarray(freq_hz, dtype=float)
+        key = freq_hz.tobytes()
+        if key not in self._factors:
+            self._factors[key] = self._compute(freq_hz)
+        return self._factors[key]
+
+    def _compute(self, freq_hz: np.ndarray) -> np.ndarray:
+        if self.amplitude_N <= 0.0 or not math.isfinite(self.rate_limit_N_per_s):
+            return np.sinc(freq_hz * self.tick_s).astype(complex)
+        per_tick = max(1, int(round(self.tick_s / self.sample_s)))
+        samples = RATE_LIMIT_TICKS * per_tick
+        time_s = np.arange(samples) * self.sample_s
+        staircase = self.amplitude_N * np.sin(2.0 * np.pi * np.outer(freq_hz, (np.arange(samples) // per_tick) * self.tick_s))
+        limited = np.empty_like(staircase)
+        step = self.rate_limit_N_per_s * self.sample_s
+        held = np.zeros(freq_hz.shape)
+        for j in range(samples):
+            held = np.clip(staircase[:, j], held - step, held + step)
+            limited[:, j] = held
+        phasor = np.exp(-2j * np.pi * np.outer(freq_hz, time_s))
+        sinusoid = self.amplitude_N * np.sin(2.0 * np.pi * np.outer(freq_hz, time_s))
+        sample_hold = np.sinc(freq_hz * self.sample_s) * np.exp(-1j * np.pi * freq_hz * self.sample_s)  # each sample held
+        half_tick = np.exp(-1j * np.pi * freq_hz * self.tick_s)
+        return (limited * phasor).sum(axis=1) / (sinusoid * phasor).sum(axis=1) * sample_hold / half_tick
+
+
+@dataclass(frozen=True)
 class Measured:
     """What the fit is given: the blocked response, and optionally the free one with its ``T``.
 
@@ -228,12 +372,17 @@ class Measured:
         Both or neither: the free response and the command-to-sliding-velocity one, same bins.
     segments : float
         Welch segments averaged per estimate (``n_d``), for the weights.
+    command : CommandPath or None
+        The command's hold and, with a chirp, its amplitude and the servo controller's rate
+        limit, for the orifice's describing function and the rate limit's lag. None: the
+        small-signal model of a continuous command.
     """
 
     blocked: FrequencyResponse | None = None
     free: FrequencyResponse | None = None
     velocity: FrequencyResponse | None = None
     segments: float = 8.0
+    command: CommandPath | None = None
 
     def __post_init__(self) -> None:
         if (self.free is None) != (self.velocity is None):
@@ -313,11 +462,11 @@ def _residuals(p: ActuatorParameters, measured: Measured) -> np.ndarray:
     parts = []
     if measured.blocked is not None:
         h = complex_response(measured.blocked)
-        error = (blocked_response(p, measured.blocked.freq_hz) - h) / np.abs(h)
+        error = (blocked_response(p, measured.blocked.freq_hz, measured.command) - h) / np.abs(h)
         parts.append(error * bin_weights(measured.blocked, measured.segments))
     if measured.free is not None and measured.velocity is not None:
         h = complex_response(measured.free)
-        model = free_response(p, measured.free.freq_hz, complex_response(measured.velocity))
+        model = free_response(p, measured.free.freq_hz, complex_response(measured.velocity), measured.command)
         parts.append((model - h) / np.abs(h) * bin_weights(measured.free, measured.segments))
     stacked = np.concatenate(parts)
     return np.concatenate([stacked.real, stacked.imag])
@@ -368,9 +517,10 @@ def fit_actuator(measured: Measured, start: ActuatorParameters, hold: tuple[str,
     errors = {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(names)}
     conditions = []
     if measured.blocked is not None:
-        conditions.append(condition_error("blocked", blocked_response(best, measured.blocked.freq_hz), measured.blocked))
+        model = blocked_response(best, measured.blocked.freq_hz, measured.command)
+        conditions.append(condition_error("blocked", model, measured.blocked))
     if measured.free is not None and measured.velocity is not None:
-        model = free_response(best, measured.free.freq_hz, complex_response(measured.velocity))
+        model = free_response(best, measured.free.freq_hz, complex_response(measured.velocity), measured.command)
         conditions.append(condition_error("free", model, measured.free))
     return ActuatorFit(best, errors, tuple(names), tuple(conditions), _valve_correlation(best, measured), covariance=cov)
 

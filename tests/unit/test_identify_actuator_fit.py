@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 import yaml
 
-from harness.identification.actuator import identify_actuator_fit, read_measured
+from harness.identification.actuator import command_path, identify_actuator_fit, read_measured
 from harness.identification.actuator_fit import (
     VELOCITY_FILE,
     ActuatorParameters,
+    CommandPath,
     Measured,
     blocked_response,
     bulk_modulus_Pa,
@@ -48,14 +49,15 @@ def _response(h: np.ndarray, freq_hz: np.ndarray, coherence: float, rng: np.rand
     return FrequencyResponse(freq_hz, np.abs(noisy), np.degrees(np.unwrap(np.angle(noisy))), np.full(len(h), coherence))
 
 
-def _measured(truth: ActuatorParameters, high_hz: float, seed: int = 0) -> Measured:
+def _measured(truth: ActuatorParameters, high_hz: float, seed: int = 0, command: CommandPath | None = None) -> Measured:
+    """Both conditions' responses of ``truth``, with ``command``'s hold, orifice and rate limit (None: small signal)."""
     rng = np.random.default_rng(seed)
     freq = np.arange(1.0, high_hz, 0.25)
     mobility = _mobility(freq)
     velocity = _response(mobility, freq, 0.995, rng)
-    blocked = _response(blocked_response(truth, freq), freq, 0.995, rng)
-    free = _response(free_response(truth, freq, mobility), freq, 0.99, rng)
-    return Measured(blocked, free, velocity, segments=20)
+    blocked = _response(blocked_response(truth, freq, command), freq, 0.995, rng)
+    free = _response(free_response(truth, freq, mobility, command), freq, 0.99, rng)
+    return Measured(blocked, free, velocity, segments=20, command=command)
 
 
 def _start() -> ActuatorParameters:
@@ -102,17 +104,22 @@ def test_the_valve_frequency_and_damping_trade_one_for_the_other() -> None:
     assert abs(fit.valve_correlation) > 0.8  # why zeta_v is held
 
 
+#: The excitation :func:`_write` records: a 700 N chirp at the loop's 500 Hz.
+EXCITATION = {"signal": "chirp", "amplitude_N": 700.0, "duration_s": 40.0, "seed": 0, "resolution_hz": 0.25}
+#: How that chirp reaches the shipped rig's force loop, as the identification reads it from excitation.json.
+CHIRP = command_path(EXCITATION, 500.0, PROFILE)
+
+
 def _write(out_dir, measured: Measured, band_hz: tuple[float, float]) -> None:
     write_frf_csv(out_dir / "frf_blocked.csv", measured.blocked)
     write_frf_csv(out_dir / "frf.csv", measured.free)
     write_frf_csv(out_dir / VELOCITY_FILE, measured.velocity)
-    excitation = {"signal": "chirp", "amplitude_N": 700.0, "band_hz": list(band_hz), "duration_s": 40.0, "seed": 0,
-                  "resolution_hz": 0.25}
+    excitation = {**EXCITATION, "band_hz": list(band_hz)}
     (out_dir / "excitation.json").write_text(json.dumps({"excitation": excitation, "rate_hz": 500.0, "conditions": {}}))
 
 
 def test_the_overlay_holds_what_was_determined_and_loads_over_the_profile(tmp_path) -> None:
-    _write(tmp_path, _measured(TRUE, 80.0), (1.0, 80.0))
+    _write(tmp_path, _measured(TRUE, 80.0, command=CHIRP), (1.0, 80.0))
     result = identify_actuator_fit(tmp_path, PROFILE, lockstep=True)
     overlay = yaml.safe_load(result.overlay_path.read_text())
     hydraulics = overlay["rig"]["actuator"]["hydraulics"]
@@ -130,7 +137,7 @@ def test_the_overlay_holds_what_was_determined_and_loads_over_the_profile(tmp_pa
 
 
 def test_a_band_below_half_the_valve_holds_the_delay_and_says_why(tmp_path) -> None:
-    _write(tmp_path, _measured(TRUE, 30.0), (1.0, 30.0))
+    _write(tmp_path, _measured(TRUE, 30.0, command=CHIRP), (1.0, 30.0))
     result = identify_actuator_fit(tmp_path, PROFILE, lockstep=True)
     assert "delay_s" in result.held and "--band-hz" in result.held["delay_s"]
     overlay = yaml.safe_load(result.overlay_path.read_text())
