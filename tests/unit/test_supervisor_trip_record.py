@@ -3,6 +3,8 @@ counters over several trips, and the E-stop and operator trip watched while idle
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from harness.safety.checks import CHECK_NAMES, bit
@@ -73,3 +75,55 @@ def test_the_soft_fade_scales_nothing_inside_the_soft_limit_and_says_so() -> Non
     assert fade.scale(0.0) == fade.scale(soft) == 1.0
     assert fade.scale(soft + band / 4) == pytest.approx(0.75)
     assert fade.detail(1000.0, soft / 2).endswith("outward force 1000 N faded to 1000 N")
+
+
+def _running(config: SafetyConfig | None = None) -> tuple[Supervisor, TickHealth]:
+    supervisor = Supervisor(config or SafetyConfig(), period_s=PERIOD_S)
+    health = TickHealth()
+    supervisor.arm(0.0, health)
+    supervisor.start(0.0)
+    _drained(supervisor)
+    return supervisor, health
+
+
+@pytest.mark.parametrize(("velocity", "reason"), [(0.0, "stroke_hard"), (0.5, "stroke_predictive")])
+def test_a_stroke_trip_says_where_the_base_mat_was_in_the_latch_and_its_event(velocity: float, reason: str) -> None:
+    supervisor, health = _running()
+    hard = supervisor.config.stroke.hard_limit_m
+    x_b = hard * (1.01 if reason == "stroke_hard" else 0.9)
+    health.meas.base_displacement_m, health.meas.base_velocity_m_s = x_b, velocity
+    assert supervisor.update(1.5, PERIOD_S, health, 0.0).trip_reason == reason
+    detail = supervisor.lifecycle.trip_detail
+    assert f"{x_b:.6g} m" in detail and f"{hard:g} m" in detail
+    assert (1.5, "fault", reason, detail) in _drained(supervisor)
+
+
+def test_a_setpoint_not_finite_trips_at_the_ticks_own_time() -> None:
+    supervisor, health = _running()
+    command = supervisor.update(2.75, PERIOD_S, health, 100.0, setpoint_N=float("nan"))
+    assert command.trip_reason == "controller_output" and supervisor.lifecycle.entered_s == 2.75
+    assert (2.75, "fault", "controller_output", "controller setpoint not finite: nan N") in _drained(supervisor)
+
+
+@pytest.mark.parametrize("action", ["safe_stop", "indicate"])
+def test_a_check_that_does_not_trip_records_what_it_saw_in_its_event_and_a_safe_stop(action: str) -> None:
+    """The force-tracking check set to act short of a trip (safety.force.tracking_action): its detail reads the tick's health."""
+    config = SafetyConfig()
+    config = dataclasses.replace(
+        config, force=dataclasses.replace(config.force, tracking_action=action, actuator_time_constant_s=0.0),
+        sensors=dataclasses.replace(config.sensors, stuck_samples=10**6),  # the still sensors are not the subject
+    )
+    supervisor, health = _running(config)
+    t, faults = 0.0, []
+    while not faults and t < 1.0:
+        t += PERIOD_S
+        health.measured_force_N = 2.0 * config.force.tracking_tolerance_N  # nothing commanded: the error is this force
+        supervisor.update(t, PERIOD_S, health, 0.0)
+        faults = [event for event in _drained(supervisor) if event[1] == "fault"]
+    assert faults and faults[0][2] == "force_tracking"
+    assert f"measured {health.measured_force_N:.6g} N" in faults[0][3]
+    if action == "safe_stop":
+        assert supervisor.state is State.STOPPING
+        assert supervisor.stop_reason == "force_tracking" and supervisor.stop_detail == faults[0][3]
+    else:
+        assert supervisor.state is State.RUNNING and supervisor.stop_detail == ""
