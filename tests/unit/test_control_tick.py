@@ -174,6 +174,32 @@ def test_an_exception_while_reading_trips(bench, monkeypatch):
     monkeypatch.setattr(b.tick.reader, "fill", lambda meas: (_ for _ in ()).throw(ValueError("decoder bug")))
     command, sent = b.step()
     assert command.trip_reason == "tick_exception" and sent == (False, 0.0)
+    assert b.supervisor.trip_detail == "ValueError: decoder bug"  # the trip names what failed
+
+
+class AddedForce:
+    """A compensator that adds a set force to the controller's (the tick must use the one it is given)."""
+
+    def __init__(self, added_N: float) -> None:
+        self.added_N, self.command_N = added_N, 0.0
+        self.pinned = self.diverged = False
+        self.bound_value = 0.0
+
+    def reset(self) -> None:
+        self.command_N = 0.0
+
+    def update(self, t, dt, force_N, meas, applied_N):
+        self.command_N = force_N + self.added_N
+        return self.command_N
+
+
+def test_the_tick_commands_through_the_compensator_it_is_given(bench):
+    b = bench()
+    b.tick = ControlTick(b.link, b.controller, b.tick.estimator, b.supervisor, None, heartbeat_every=1,
+                         compensator=AddedForce(150.0))
+    b.run_until_running()
+    _, sent = b.step()
+    assert sent == (True, pytest.approx(b.controller.force_N + 150.0, abs=1.0))
 
 
 def test_rejected_frames_do_not_keep_a_sensor_fresh(bench):
