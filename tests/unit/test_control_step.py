@@ -12,6 +12,7 @@ import ast
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from harness.control.compensation import NoCompensation
@@ -162,6 +163,27 @@ def test_a_step_overwrites_its_values_and_marks_control():
     assert trace.marks[CONTROL + 1] == 7.0
     control_step(PERIOD_S, PERIOD_S, health, Raises(), Fixed(), NoCompensation(), supervisor, values)
     assert math.isnan(values.friction_N) and math.isnan(values.raw_N)  # nothing of the step before is left
+
+
+class SeesState(Fixed):
+    """A full-state controller: it remembers the state it was handed."""
+
+    needs_full_state = True
+    seen = None
+
+    def update(self, t, dt, meas, friction, state):
+        self.seen = state
+        return self.force_N
+
+
+def test_the_step_hands_the_plants_state_to_a_full_state_controller():
+    """Offline, the full-state controllers (the paper's LQR sliding surfaces) read the plant's true state Z."""
+    profile = load_profile(PROFILES / "nceer_4dof.yaml")
+    supervisor, health = _running_supervisor()
+    controller, state = SeesState(), np.arange(8.0)
+    control_step(0.0, PERIOD_S, health, make_friction_estimator(profile), controller, NoCompensation(), supervisor,
+                 StepValues(), state)
+    assert controller.seen is state
 
 
 def test_the_ideal_simulator_has_no_safety_layer_so_an_exception_still_escapes():
