@@ -29,11 +29,11 @@ no fitted value.
 pole. What the loop records adds a delay ``tau`` between the command and the load cell (the
 command's transport, the status frame's period, the hold of the command over a tick).
 
-- **Blocked** (``xdot_b = 0``): ``H_b = e^{-s tau} N w_f G_v / D``.
+- **Blocked** (``xdot_b = 0``): ``H_b = e^{-s tau} R N w_f G_v / D``, ``R`` the command's hold and rate limit.
 - **Free**: the base mat moves, ``xdot_b`` answers the force through the structure, its
   bearings' friction and the table. Taking the cross-spectrum of (F1) with the command gives,
-  exactly and whatever moves the base mat (friction included),
-  ``H_free = (e^{-s tau} N w_f G_v - k_h T) / D`` with ``T`` the measured response from the
+  whatever moves the base mat (friction included),
+  ``H_free = (e^{-s tau} R N w_f G_v - k_h (1 - alpha N G_v H) T) / D`` with ``T`` the measured response from the
   command to the sliding velocity (:data:`VELOCITY_FILE`). No model of the structure is
   needed: the free condition adds ``k_h`` alone.
 
