@@ -10,6 +10,7 @@ the same outcome to the last count; and they pin the counter rules the E2E profi
 from __future__ import annotations
 
 import math
+import re
 import socket
 import time
 import uuid
@@ -22,6 +23,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from drivers.protocol import frame_kernel as kernel
+from drivers.protocol.codec import DEFAULT_DBC as REPO_DBC
 from drivers.protocol.codec import Protocol, load_protocol
 from drivers.protocol.datagram import encode_frame
 from drivers.protocol.decoder import Decoder, RxStatus
@@ -306,3 +308,48 @@ def test_counters_are_kept_per_message_and_a_reset_of_one_leaves_the_others() ->
     assert _counters(decoder, [9], "ACTUATOR_CMD") == [RxStatus.REPEATED_COUNTER]
     decoder.reset_counter(0x7FF)  # not received: nothing to forget, no error
     decoder.reset_counter(-1)
+
+
+def test_a_reset_of_an_identifier_no_message_has_forgets_nothing_and_never_raises() -> None:
+    """Not even the decoder's last message's history (its slot is the one a negative index would reach)."""
+    decoder = Decoder(CLASSIC)
+    last = list(CLASSIC.messages)[-1]
+    assert _counters(decoder, [9], last) == [RxStatus.OK]
+    for frame_id in (0x7FF, 0x7FE, 0x800, -1, 10**6):  # no message, past the 11-bit range, negative
+        decoder.reset_counter(frame_id)
+    assert _counters(decoder, [9], last) == [RxStatus.REPEATED_COUNTER]
+
+
+def _edge_protocol(folder) -> Protocol:
+    """The shipped DBC with ESTOP at identifier 0, ACTUATOR_CMD at 1 and HEARTBEAT at 0x7FF: the 11-bit range's ends."""
+    text = REPO_DBC.read_text("utf-8")
+    for old_id, new_id in ((16, 0), (32, 1), (80, 0x7FF)):
+        text = re.sub(rf"\b(BO_|SG_|VAL_) {old_id} ", rf"\1 {new_id} ", text)
+    (folder / "edges.dbc").write_text(text, encoding="utf-8")
+    protocol = load_protocol(folder / "edges.dbc")
+    assert [protocol[n].frame_id for n in ("ESTOP", "ACTUATOR_CMD", "HEARTBEAT")] == [0, 1, 0x7FF]
+    return protocol
+
+
+def test_the_decoders_first_message_and_the_edges_of_the_11_bit_range_reset(tmp_path) -> None:
+    protocol = _edge_protocol(tmp_path)
+    for names in (["ESTOP", "HEARTBEAT"], ["HEARTBEAT", "ESTOP"]):  # each message in slot 0 once
+        decoder = Decoder(protocol, names)
+        for name in names:
+            codec = protocol[name]
+            data = bytearray(codec.length)
+            codec.encode_into(data, [0.0] * len(codec.signals), 5)
+            assert decoder.decode(codec.frame_id, data) == RxStatus.OK
+            assert decoder.decode(codec.frame_id, data) == RxStatus.REPEATED_COUNTER
+            decoder.reset_counter(codec.frame_id)
+            assert decoder.decode(codec.frame_id, data) == RxStatus.OK, name  # forgotten: any counter is accepted
+
+
+def test_a_new_decoder_has_counted_nothing_whatever_identifiers_its_protocol_uses(tmp_path) -> None:
+    """Its kernels are compiled at construction on frames no message can own (identifier -1, no datagram)."""
+    protocol = _edge_protocol(tmp_path)
+    decoder = Decoder(protocol)
+    assert decoder.last is None and decoder.rejected_total == 0
+    for name in protocol.messages:
+        assert decoder.accepted(name) == 0
+        assert all(decoder.rejected(name, status) == 0 for status in RxStatus if status != RxStatus.OK), name
