@@ -661,3 +661,11 @@ def test_the_list_of_checks_is_put_in_bit_order_and_a_gap_or_a_repeat_is_refused
     with pytest.raises(RuntimeError) as repeated:
         _in_bit_order(repeat)
     assert str(repeated.value) == f"safety check names repeat: {[c.name for c in repeat]}"
+
+
+def test_a_name_the_safety_package_does_not_have_is_an_attribute_error_naming_it() -> None:
+    """The package loads its names lazily (PEP 562): a wrong one says which, as a module's own attribute error does."""
+    import harness.safety as safety
+
+    with pytest.raises(AttributeError, match="module 'harness.safety' has no attribute 'no_such_check'"):
+        safety.no_such_check  # noqa: B018 - the attribute access is the test
