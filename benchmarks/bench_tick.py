@@ -35,7 +35,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from harness.loop import tick as tick_module  # noqa: E402
+from harness.loop import step as step_module  # noqa: E402 - the control step calls the compensation
 from harness.loop.tick import ControlTick  # noqa: E402
 from harness.profile import load_profile  # noqa: E402
 from harness.runs.dry_run import DryRunOptions, dry_run  # noqa: E402
@@ -110,7 +110,7 @@ def parts(duration_s: float) -> tuple[str, np.ndarray]:
     """
     totals = dict.fromkeys(PHASES[:-1], 0)
     rows: list[list[float]] = []
-    restore: list[tuple[object, str, object]] = [(tick_module, "compensate", tick_module.compensate)]
+    restore: list[tuple[object, str, object]] = [(step_module, "compensate", step_module.compensate)]
 
     def wrap(tick: ControlTick) -> None:
         for owner, method, phase in (
@@ -123,7 +123,7 @@ def parts(duration_s: float) -> tuple[str, np.ndarray]:
                 kind = type(owner)
                 restore.append((kind, method, kind.__dict__.get(method)))
                 setattr(kind, method, _timed(getattr(kind, method), totals, phase))
-        tick_module.compensate = _timed(tick_module.compensate, totals, "compensation")  # type: ignore[assignment]
+        step_module.compensate = _timed(step_module.compensate, totals, "compensation")  # type: ignore[assignment]
 
     def run(self: ControlTick, *args: object, **kwargs: object) -> object:
         if len(restore) == 1:
