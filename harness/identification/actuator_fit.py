@@ -229,29 +229,32 @@ def orifice_describing_function(demand: np.ndarray, force_N: np.ndarray, capacit
     return np.where(demand == 0, 1.0, first / safe)
 
 
-def _closed_loop(p: ActuatorParameters, freq_hz: np.ndarray, velocity: np.ndarray | None,
-                 command: CommandPath | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(N w_f G_v R e^{-s tau}, D, N)`` per bin; ``velocity``: the sliding velocity per N of command (None: blocked).
+def _recorded_force(p: ActuatorParameters, freq_hz: np.ndarray, stroke: np.ndarray | None,
+                    command: CommandPath | None) -> np.ndarray:
+    """The recorded load cell per N of command (complex): (F1) with ``stroke`` the sliding velocity per N of command.
 
-    Without ``command`` (small signal) ``N`` and the rate limit's ``R`` are 1. With it, ``R`` is
-    :meth:`CommandPath.factor`, and ``N`` is iterated with the force and the spool's phasors the
-    loop gives at its amplitude (:func:`orifice_describing_function`; 1 for an infinite
-    ``p.force_capacity_N``).
+    ``stroke`` None is the blocked piston. Without ``command`` (small signal) ``N`` and the rate
+    limit's ``R`` are 1. With it, ``R`` is :meth:`CommandPath.factor`, and ``N`` is iterated with
+    the force and the spool's phasors the loop gives at its amplitude
+    (:func:`orifice_describing_function`; 1 for an infinite ``p.force_capacity_N``).
     """
     s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
     gain = p.bandwidth_rad_s() * _valve(p, s)
     reaching = np.exp(-s * p.delay_s) * (1.0 if command is None else command.factor(freq_hz))  # per N of command
     amplitude_N = 0.0 if command is None else command.amplitude_N
-    stroke = np.zeros_like(s) if velocity is None else velocity
-    feedforward = _feedforward_stiffness(p, s) * stroke
-    describing = np.ones_like(s)
-    nonlinear = amplitude_N > 0.0 and math.isfinite(p.force_capacity_N)
-    for _ in range(DESCRIBING_ITERATIONS if nonlinear else 0):
-        denominator = s + p.leakage_pole_per_s + describing * gain
-        force = (describing * (gain * reaching + feedforward) - p.hydraulic_stiffness_N_per_m * stroke) / denominator
-        demand = gain * (reaching - force) + feedforward
-        describing = orifice_describing_function(demand * amplitude_N, force * amplitude_N, p.force_capacity_N)
-    return describing * gain * reaching, s + p.leakage_pole_per_s + describing * gain, describing
+    velocity = np.zeros_like(s) if stroke is None else stroke
+    feedforward = _feedforward_stiffness(p, s) * velocity
+
+    def force(describing: np.ndarray | float) -> np.ndarray:
+        return (describing * (gain * reaching + feedforward) - p.hydraulic_stiffness_N_per_m * velocity) / (
+            s + p.leakage_pole_per_s + describing * gain)
+
+    describing: np.ndarray | float = 1.0
+    for _ in range(DESCRIBING_ITERATIONS if amplitude_N > 0.0 and math.isfinite(p.force_capacity_N) else 0):
+        now = force(describing)
+        demand = gain * (reaching - now) + feedforward
+        describing = orifice_describing_function(demand * amplitude_N, now * amplitude_N, p.force_capacity_N)
+    return force(describing)
 
 
 def blocked_response(p: ActuatorParameters, freq_hz: np.ndarray, command: CommandPath | None = None) -> np.ndarray:
@@ -259,8 +262,7 @@ def blocked_response(p: ActuatorParameters, freq_hz: np.ndarray, command: Comman
 
     ``command``: a chirp's, for the orifice's describing function and the rate limit; None: small signal.
     """
-    path, denominator, _ = _closed_loop(p, freq_hz, None, command)
-    return path / denominator
+    return _recorded_force(p, freq_hz, None, command)
 
 
 def velocity_feedback_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np.ndarray:
@@ -270,8 +272,8 @@ def velocity_feedback_response(p: ActuatorParameters, freq_hz: np.ndarray) -> np
     controller's velocity feed-forward. With :func:`blocked_response` it is the whole actuator of
     (F1), whatever it pushes.
     """
-    _, denominator, _ = _closed_loop(p, freq_hz, None, None)
     s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
+    denominator = s + p.leakage_pole_per_s + p.bandwidth_rad_s() * _valve(p, s)
     return (p.hydraulic_stiffness_N_per_m - _feedforward_stiffness(p, s)) / denominator
 
 
@@ -283,11 +285,8 @@ def free_response(p: ActuatorParameters, freq_hz: np.ndarray, velocity_response:
     as measured, advanced by the velocity sensors' delay relative to the load cell
     (:attr:`ActuatorParameters.velocity_lag_s`). ``command`` as in :func:`blocked_response`.
     """
-    s = 2j * np.pi * np.asarray(freq_hz, dtype=float)
-    stroke = velocity_response * np.exp(s * p.velocity_lag_s)
-    path, denominator, describing = _closed_loop(p, freq_hz, stroke, command)
-    bleed = p.hydraulic_stiffness_N_per_m - describing * _feedforward_stiffness(p, s)
-    return (path - bleed * stroke) / denominator
+    lead = np.exp(2j * np.pi * np.asarray(freq_hz, dtype=float) * p.velocity_lag_s)
+    return _recorded_force(p, freq_hz, velocity_response * lead, command)
 
 
 def complex_response(response: FrequencyResponse) -> np.ndarray:
