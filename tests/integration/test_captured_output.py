@@ -105,7 +105,8 @@ def test_the_simulate_header_names_the_variant(capsys) -> None:
 
 @pytest.mark.parametrize("name", ["robustness_table2", "profiles/studies/robustness_table2.yaml",
                                   "studies/robustness_table2.yaml"])
-def test_a_shipped_study_is_found_by_name_from_outside_the_checkout(name: str, tmp_path: Path, monkeypatch, capsys) -> None:
+def test_a_shipped_study_is_found_by_name_from_outside_the_checkout(name: str, tmp_path: Path, monkeypatch, capsys,
+                                                                   records_dir: Path) -> None:  # El Centro: a real record
     monkeypatch.chdir(tmp_path)
     assert main(["sweep", name, "--plan", "--out", str(tmp_path / "results")]) == exit_codes.OK, capsys.readouterr().err
     lines = capsys.readouterr().out.splitlines()

@@ -200,8 +200,12 @@ def _placeholder(args: argparse.Namespace, example: Example) -> str:
     return ""
 
 
-def check_for(example: Example, args: argparse.Namespace, records: bool) -> Check:
-    """The check of one parsed example (see the module docstring)."""
+def check_for(example: Example, args: argparse.Namespace, records: bool, after_records: bool = False) -> Check:
+    """The check of one parsed example (see the module docstring).
+
+    ``after_records``: an earlier example of its block names a real record, so without the records
+    this one would read what that one could not make (``harness report study/`` after ``simulate ... --out study/``).
+    """
     command = example.argv[0]
     placeholder = _placeholder(args, example)
     if placeholder:
@@ -218,6 +222,8 @@ def check_for(example: Example, args: argparse.Namespace, records: bool) -> Chec
             return Check("parse", "summarizes the results of a sweep run before (192 cases: minutes)")
     if not records and REAL_RECORDS.search(example.text):
         return Check("parse", f"the real records are not in {SHARED_RECORDS}")
+    if not records and after_records:
+        return Check("parse", f"follows an example of its block that needs the real records, not in {SHARED_RECORDS}")
     if command == "sweep":
         return Check("plan", "expands and checks every case; running them is test_sweep.py's job")
     if command in BUS_COMMANDS:
@@ -271,13 +277,13 @@ def _exported(value: str) -> str:
     return value.replace("$PWD", str(REPO)).replace("${PWD}", str(REPO))
 
 
-def _check(example: Example, monkeypatch: pytest.MonkeyPatch, folder: Path, capsys) -> str:
+def _check(example: Example, monkeypatch: pytest.MonkeyPatch, folder: Path, capsys, after_records: bool = False) -> str:
     """Check one example; a line for the log. Raises AssertionError naming the example when it fails."""
     records = (SHARED_RECORDS / "elcentro_1940_NS.csv").is_file()
     argv = _with_records(example.argv)
     try:
         args = _parse(argv)
-        check = check_for(example, args, records)
+        check = check_for(example, args, records, after_records)
         if getattr(args, "profile", None) and Path(args.profile).is_file() and hasattr(args, "allow_weaker_safety"):
             load_acknowledged(args)  # --set and --variant as the command loads them
         if check.kind == "parse":
@@ -319,7 +325,8 @@ def test_every_documented_example_does_what_its_docs_say(block: Block, tmp_path:
             assert EXPORT.match(line), f"{block.name}: an export the test does not read: {line!r}"
         else:
             assert words[0] == "sudo", f"{block.name}: no check decided for {line!r}"  # kernel set-up (root)
-    log = [_check(example, monkeypatch, tmp_path, capsys) for example in block.examples]
+    named = [bool(REAL_RECORDS.search(example.text)) for example in block.examples]
+    log = [_check(example, monkeypatch, tmp_path, capsys, any(named[:k])) for k, example in enumerate(block.examples)]
     print("\n".join(log))
     assert block.examples or block.other_lines
 

@@ -173,7 +173,7 @@ axes:
     assert not set(_rows(tmp_path / "plain")) & set(rows)  # the twin's cases are other cases
 
 
-def test_the_shipped_compensation_study_plans_its_243_cases(capsys):
+def test_the_shipped_compensation_study_plans_its_243_cases(capsys, records_dir):  # its records are the real ones
     status, out = _sweep(capsys, "compensation", "--plan")
     assert status == 0, out
     assert "243 cases (3 records x 3 PGA levels x 1 controller x 27 grid points x 1 sample)" in out
